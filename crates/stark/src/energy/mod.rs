@@ -1,0 +1,18 @@
+//! Energies and their derivatives: the scalar abstraction, hyper-dual and symbolic
+//! differentiation, the kinematic map from world positions to DOFs, PSD projection and assembly.
+
+pub mod assembly;
+pub mod dual;
+pub mod potential;
+pub mod psd;
+pub mod scalar;
+pub mod symbolic;
+pub mod tensor;
+pub mod term;
+pub mod testing;
+
+pub use dual::HyperDual;
+pub use potential::{Node, Potential, PotentialTerm, Stencil};
+pub use scalar::Scalar;
+pub use tensor::{Mat, Mat2, Mat3, Mat32, Vec3};
+pub use term::{EnergyTerm, EvalMode, StepCheck};

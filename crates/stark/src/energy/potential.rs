@@ -1,0 +1,256 @@
+//! Energies written in world positions, and the wrapper that turns them into solver terms.
+//!
+//! A [`Potential`] is the one thing a model writes: for each element, the world positions of its
+//! `N` nodes go in and a scalar energy comes out, generic over the [`Scalar`] type. It does not
+//! know whether a node is a cloth vertex or (later) a point on a rigid body: [`PotentialTerm`]
+//! applies the kinematic map (DESIGN §2, paper eq. 1: `f = −Gᵀ ∂Ψ/∂x`), takes derivatives (generated
+//! kernels where the potential supplies them, hyper-duals otherwise), projects element Hessians
+//! and writes them in DOF space.
+
+use super::dual::HyperDual;
+use super::psd::project_psd;
+use super::scalar::Scalar;
+use super::tensor::Vec3;
+use super::term::{element_stride, EnergyTerm, EvalMode, StepCheck};
+use crate::state::EvalState;
+use nalgebra::Vector3;
+use rayon::prelude::*;
+
+/// A node of an element stencil.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Node {
+    /// A deformable node (index into the simulation's node arrays); its DOF block is its
+    /// velocity, `∂x/∂v = dt·I`.
+    Point(u32),
+}
+
+impl Node {
+    /// The deformable node index.
+    #[inline]
+    pub fn index(&self) -> usize {
+        match *self {
+            Node::Point(i) => i as usize,
+        }
+    }
+}
+
+/// The data an element energy may read besides the differentiated positions.
+pub struct Stencil<'a, const N: usize> {
+    /// The nodes.
+    pub nodes: [Node; N],
+    /// Trial end-of-step positions, m (the values of the differentiated variables).
+    pub x: [Vector3<f64>; N],
+    /// Start-of-step positions, m.
+    pub x0: [Vector3<f64>; N],
+    /// Time step, s.
+    pub dt: f64,
+    /// The whole state (velocities, gravity, time).
+    pub state: &'a EvalState<'a>,
+}
+
+impl<'a, const N: usize> Stencil<'a, N> {
+    /// Gather the stencil of `nodes` from `state`.
+    #[inline]
+    pub fn new(nodes: [Node; N], state: &'a EvalState<'a>) -> Self {
+        Stencil {
+            nodes,
+            x: nodes.map(|n| state.x[n.index()]),
+            x0: nodes.map(|n| state.nodes.x[n.index()]),
+            dt: state.dt,
+            state,
+        }
+    }
+
+    /// Positions as constants of scalar type `S`.
+    #[inline]
+    pub fn x_as<S: Scalar>(&self) -> [Vec3<S>; N] {
+        self.x.map(|p| Vec3::constant(&p))
+    }
+}
+
+/// An energy defined per element on `N` nodes, written in world positions.
+///
+/// Implement [`Potential::energy`] once, generically; register the potential with
+/// `Simulation::add_potential` (it is wrapped in a [`PotentialTerm`]). Optionally supply
+/// [`Potential::derivatives`] from generated code for speed; tests compare it with the hyper-dual
+/// derivatives of `energy`.
+pub trait Potential<const N: usize>: Send + Sync {
+    /// Name used in logs and errors.
+    fn name(&self) -> &str;
+    /// Number of elements.
+    fn num_elements(&self) -> usize;
+    /// Nodes of element `e`.
+    fn nodes(&self, e: usize) -> [Node; N];
+    /// Energy of element `e` at positions `x` (J).
+    fn energy<S: Scalar>(&self, e: usize, x: &[Vec3<S>; N], stencil: &Stencil<N>) -> S;
+    /// Value, gradient and full Hessian with respect to `x` from a fast path, written into `out`
+    /// (hyper-dual layout, both triangles). Return `false` to use hyper-duals.
+    fn derivatives(&self, _e: usize, _stencil: &Stencil<N>, _out: &mut HyperDual<N>) -> bool {
+        false
+    }
+    /// See [`EnergyTerm::topology_version`].
+    fn topology_version(&self) -> u64 {
+        0
+    }
+    /// See [`EnergyTerm::before_step`].
+    fn before_step(&mut self, _state: &EvalState) {}
+    /// See [`EnergyTerm::check_converged_step`].
+    fn check_converged_step(&mut self, _state: &EvalState) -> StepCheck {
+        StepCheck::Accept
+    }
+    /// See [`EnergyTerm::after_step`].
+    fn after_step(&mut self, _state: &EvalState) {}
+}
+
+/// Value, gradient and Hessian of element `e` with respect to its node positions, by hyper-duals
+/// (the oracle) — both Hessian triangles filled.
+pub fn dual_derivatives<P: Potential<N>, const N: usize>(
+    p: &P,
+    e: usize,
+    stencil: &Stencil<N>,
+) -> HyperDual<N> {
+    let xs = HyperDual::<N>::variables(&stencil.x);
+    let mut d = p.energy(e, &xs, stencil);
+    symmetrize(&mut d);
+    d
+}
+
+/// Element derivatives by the fastest available path.
+pub fn element_derivatives<P: Potential<N>, const N: usize>(
+    p: &P,
+    e: usize,
+    stencil: &Stencil<N>,
+) -> HyperDual<N> {
+    let mut d = HyperDual::<N>::constant(0.0);
+    if p.derivatives(e, stencil, &mut d) {
+        d
+    } else {
+        dual_derivatives(p, e, stencil)
+    }
+}
+
+/// Copy the upper triangle of a hyper-dual Hessian to the lower.
+pub fn symmetrize<const N: usize>(d: &mut HyperDual<N>) {
+    let n = 3 * N;
+    let h = d
+        .hess
+        .as_flattened_mut()
+        .as_flattened_mut()
+        .as_flattened_mut();
+    for i in 0..n {
+        for j in 0..i {
+            h[i * n + j] = h[j * n + i];
+        }
+    }
+}
+
+/// Sum `f(0) + … + f(n−1)` in parallel, in a fixed order (independent of the thread count).
+pub fn deterministic_sum(n: usize, f: impl Fn(usize) -> f64 + Sync) -> f64 {
+    const CHUNK: usize = 512;
+    if n <= CHUNK {
+        return (0..n).map(f).sum();
+    }
+    let parts: Vec<f64> = (0..n.div_ceil(CHUNK))
+        .into_par_iter()
+        .map(|c| (c * CHUNK..n.min((c + 1) * CHUNK)).map(&f).sum())
+        .collect();
+    parts.iter().sum()
+}
+
+/// A [`Potential`] as a solver [`EnergyTerm`].
+pub struct PotentialTerm<P, const N: usize> {
+    /// The wrapped potential.
+    pub potential: P,
+}
+
+impl<P, const N: usize> PotentialTerm<P, N> {
+    /// Wrap a potential.
+    pub fn new(potential: P) -> Self {
+        PotentialTerm { potential }
+    }
+}
+
+impl<P, const N: usize> std::ops::Deref for PotentialTerm<P, N> {
+    type Target = P;
+    fn deref(&self) -> &P {
+        &self.potential
+    }
+}
+impl<P, const N: usize> std::ops::DerefMut for PotentialTerm<P, N> {
+    fn deref_mut(&mut self) -> &mut P {
+        &mut self.potential
+    }
+}
+
+impl<P: Potential<N>, const N: usize> EnergyTerm for PotentialTerm<P, N> {
+    fn name(&self) -> &str {
+        self.potential.name()
+    }
+    fn num_elements(&self) -> usize {
+        self.potential.num_elements()
+    }
+    fn stencil_width(&self) -> usize {
+        N
+    }
+    fn write_stencils(&self, _state: &EvalState, out: &mut [u32]) {
+        out.par_chunks_mut(N).enumerate().for_each(|(e, o)| {
+            for (slot, node) in o.iter_mut().zip(self.potential.nodes(e)) {
+                *slot = node.index() as u32;
+            }
+        });
+    }
+    fn topology_version(&self) -> u64 {
+        self.potential.topology_version()
+    }
+    fn energy(&self, state: &EvalState) -> f64 {
+        deterministic_sum(self.potential.num_elements(), |e| {
+            let stencil = Stencil::new(self.potential.nodes(e), state);
+            let x = stencil.x_as::<f64>();
+            self.potential.energy(e, &x, &stencil)
+        })
+    }
+    fn evaluate(&self, state: &EvalState, mode: EvalMode, out: &mut [f64]) {
+        let stride = element_stride(N);
+        let dt = state.dt;
+        let n = 3 * N;
+        out.par_chunks_mut(stride).enumerate().for_each(|(e, o)| {
+            let stencil = Stencil::new(self.potential.nodes(e), state);
+            let mut d = element_derivatives(&self.potential, e, &stencil);
+            // Deformable map: ∂x/∂v = dt·I, so ∇ᵥ = dt ∇ₓ and Hᵥ = dt² Hₓ (projection commutes
+            // with the positive scaling).
+            let h = d
+                .hess
+                .as_flattened_mut()
+                .as_flattened_mut()
+                .as_flattened_mut();
+            if mode == EvalMode::ProjectedHessian {
+                project_psd(h, n);
+            }
+            o[0] = d.value;
+            for (k, g) in d.grad.as_flattened().iter().enumerate() {
+                o[1 + k] = dt * g;
+            }
+            let dt2 = dt * dt;
+            let base = 1 + 3 * N;
+            for a in 0..N {
+                for b in 0..N {
+                    let blk = &mut o[base + 9 * (a * N + b)..base + 9 * (a * N + b) + 9];
+                    for i in 0..3 {
+                        for j in 0..3 {
+                            blk[3 * i + j] = dt2 * h[(3 * a + i) * n + 3 * b + j];
+                        }
+                    }
+                }
+            }
+        });
+    }
+    fn before_step(&mut self, state: &EvalState) {
+        self.potential.before_step(state)
+    }
+    fn check_converged_step(&mut self, state: &EvalState) -> StepCheck {
+        self.potential.check_converged_step(state)
+    }
+    fn after_step(&mut self, state: &EvalState) {
+        self.potential.after_step(state)
+    }
+}

@@ -1,0 +1,84 @@
+//! The interface between energies and the solver.
+//!
+//! [`EnergyTerm`] is what the Newton solver sees: a set of elements, each coupling a few 3-wide
+//! DOF blocks, with value, gradient and (projected) Hessian in DOF space. Most energies do not
+//! implement it directly: they implement [`Potential`](super::potential::Potential), written in
+//! world positions, and are wrapped in [`PotentialTerm`](super::potential::PotentialTerm), which
+//! applies the kinematic map, derivatives and projection.
+
+use crate::state::EvalState;
+
+/// Padding value in a stencil: no DOF block.
+pub const NO_DOF: u32 = u32::MAX;
+
+/// Buffer layout of one element's output with `m` DOF blocks:
+/// `[energy, gradient (3m), Hessian blocks (m·m blocks of 9, block (a, b) at 9(a·m + b), row-major)]`.
+#[inline]
+pub fn element_stride(m: usize) -> usize {
+    1 + 3 * m + 9 * m * m
+}
+
+/// What the assembler asks of a term.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EvalMode {
+    /// Value, gradient and Hessian projected to positive semi-definite per element.
+    ProjectedHessian,
+    /// Value, gradient and the exact Hessian (tests, and energies known to be convex).
+    ExactHessian,
+}
+
+/// Result of a term's check of a converged step.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum StepCheck {
+    /// Accept the step.
+    Accept,
+    /// Retry the same step (the term hardened a stiffness); the message says why.
+    Retry(String),
+}
+
+/// A sum of element energies over DOF blocks, as the solver sees it.
+pub trait EnergyTerm: Send + Sync {
+    /// Name used in logs and errors.
+    fn name(&self) -> &str;
+
+    /// Number of elements.
+    fn num_elements(&self) -> usize;
+
+    /// DOF blocks per element (stencils are padded with [`NO_DOF`]).
+    fn stencil_width(&self) -> usize;
+
+    /// Write the DOF blocks of every element (`num_elements × stencil_width`).
+    fn write_stencils(&self, state: &EvalState, out: &mut [u32]);
+
+    /// Changes whenever the set of elements or their DOF blocks change, so that the solver knows
+    /// when to rebuild the sparsity pattern.
+    fn topology_version(&self) -> u64 {
+        0
+    }
+
+    /// Total energy at `state`.
+    fn energy(&self, state: &EvalState) -> f64;
+
+    /// Per-element value, gradient and Hessian in DOF space, in the layout of [`element_stride`].
+    fn evaluate(&self, state: &EvalState, mode: EvalMode, out: &mut [f64]);
+
+    /// Called once before each time step (lagged quantities, e.g. friction, are set here).
+    fn before_step(&mut self, _state: &EvalState) {}
+
+    /// Called before every evaluation (contact updates its active set here).
+    fn prepare_evaluation(&mut self, _state: &EvalState) {}
+
+    /// Largest fraction `α ∈ (0, 1]` of the step `state → state + Δ` that is valid (CCD).
+    /// `trial` is the state at the full step.
+    fn max_step_fraction(&self, _state: &EvalState, _trial: &EvalState) -> f64 {
+        1.0
+    }
+
+    /// Checked after Newton converged; may harden a stiffness and ask for a retry.
+    fn check_converged_step(&mut self, _state: &EvalState) -> StepCheck {
+        StepCheck::Accept
+    }
+
+    /// Called once a step is accepted.
+    fn after_step(&mut self, _state: &EvalState) {}
+}

@@ -1,0 +1,158 @@
+//! Checks of energy derivatives against central finite differences, for the crate's tests and for
+//! users writing their own potentials.
+
+use super::dual::HyperDual;
+use super::potential::{dual_derivatives, Potential, Stencil};
+use super::scalar::Scalar;
+use super::tensor::Vec3;
+use crate::state::{positions_from_velocities, EvalState, NodeArrays};
+use nalgebra::Vector3;
+
+/// A self-contained state for evaluating energies in tests.
+pub struct TestState {
+    /// Node arrays (start-of-step positions and velocities).
+    pub nodes: NodeArrays,
+    /// Trial velocities.
+    pub v: Vec<Vector3<f64>>,
+    /// Trial positions `x0 + dt·v`.
+    pub x: Vec<Vector3<f64>>,
+    /// Time step, s.
+    pub dt: f64,
+    /// Gravity, m/s².
+    pub gravity: Vector3<f64>,
+}
+
+impl TestState {
+    /// Nodes with rest and start positions `x0`, start velocities `v0`, trial velocities `v`.
+    pub fn new(
+        rest: Vec<Vector3<f64>>,
+        x0: Vec<Vector3<f64>>,
+        v0: Vec<Vector3<f64>>,
+        v: Vec<Vector3<f64>>,
+        dt: f64,
+    ) -> Self {
+        let n = x0.len();
+        let nodes = NodeArrays {
+            rest,
+            x: x0,
+            v: v0,
+            force: vec![Vector3::zeros(); n],
+            acceleration: vec![Vector3::zeros(); n],
+        };
+        let mut x = Vec::new();
+        positions_from_velocities(&nodes, &v, dt, &mut x);
+        TestState {
+            nodes,
+            v,
+            x,
+            dt,
+            gravity: Vector3::new(0.0, 0.0, -9.81),
+        }
+    }
+
+    /// The evaluation view.
+    pub fn eval(&self) -> EvalState<'_> {
+        EvalState {
+            dt: self.dt,
+            time: 0.0,
+            gravity: self.gravity,
+            nodes: &self.nodes,
+            v: &self.v,
+            x: &self.x,
+        }
+    }
+}
+
+fn rel_err(a: &[f64], b: &[f64]) -> f64 {
+    let diff: f64 = a
+        .iter()
+        .zip(b)
+        .map(|(x, y)| (x - y) * (x - y))
+        .sum::<f64>()
+        .sqrt();
+    let scale: f64 = b
+        .iter()
+        .map(|y| y * y)
+        .sum::<f64>()
+        .sqrt()
+        .max(a.iter().map(|x| x * x).sum::<f64>().sqrt());
+    if scale == 0.0 {
+        diff
+    } else {
+        diff / scale
+    }
+}
+
+/// Largest relative errors over all elements of `p`: `(gradient vs FD of the energy, Hessian vs
+/// FD of the exact gradient, fast path vs hyper-duals)`. The step is `step_m` (m).
+pub fn derivative_errors<P: Potential<N>, const N: usize>(
+    p: &P,
+    state: &EvalState,
+    step_m: f64,
+) -> (f64, f64, f64) {
+    let n = 3 * N;
+    let (mut eg, mut eh, mut ef) = (0.0f64, 0.0f64, 0.0f64);
+    for e in 0..p.num_elements() {
+        let stencil = Stencil::new(p.nodes(e), state);
+        let exact = dual_derivatives(p, e, &stencil);
+        let energy_at = |x: &[Vector3<f64>; N]| {
+            let xs: [Vec3<f64>; N] = x.map(|q| Vec3::constant(&q));
+            p.energy(e, &xs, &stencil)
+        };
+        let grad_at = |x: &[Vector3<f64>; N]| {
+            let xs = HyperDual::<N>::variables(x);
+            p.energy(e, &xs, &stencil).grad
+        };
+        let mut fd_grad = vec![0.0; n];
+        let mut fd_hess = vec![0.0; n * n];
+        for k in 0..n {
+            let (a, i) = (k / 3, k % 3);
+            let mut xp = stencil.x;
+            let mut xm = stencil.x;
+            xp[a][i] += step_m;
+            xm[a][i] -= step_m;
+            fd_grad[k] = (energy_at(&xp) - energy_at(&xm)) / (2.0 * step_m);
+            let (gp, gm) = (grad_at(&xp), grad_at(&xm));
+            for l in 0..n {
+                fd_hess[l * n + k] = (gp[l / 3][l % 3] - gm[l / 3][l % 3]) / (2.0 * step_m);
+            }
+        }
+        eg = eg.max(rel_err(&fd_grad, exact.gradient_flat()));
+        eh = eh.max(rel_err(
+            &fd_hess,
+            exact.hess.as_flattened().as_flattened().as_flattened(),
+        ));
+        let mut fast = HyperDual::<N>::constant(0.0);
+        if p.derivatives(e, &stencil, &mut fast) {
+            let mut a = vec![fast.value];
+            a.extend_from_slice(fast.gradient_flat());
+            a.extend_from_slice(fast.hess.as_flattened().as_flattened().as_flattened());
+            let mut b = vec![exact.value];
+            b.extend_from_slice(exact.gradient_flat());
+            b.extend_from_slice(exact.hess.as_flattened().as_flattened().as_flattened());
+            ef = ef.max(rel_err(&a, &b));
+        }
+    }
+    (eg, eh, ef)
+}
+
+/// Assert that every element's gradient and Hessian agree with central finite differences to a
+/// relative error below `1e-5`, and any fast path agrees with hyper-duals to `1e-9`.
+pub fn assert_derivatives<P: Potential<N>, const N: usize>(p: &P, state: &EvalState, step_m: f64) {
+    let (eg, eh, ef) = derivative_errors(p, state, step_m);
+    assert!(
+        eg < 1e-5,
+        "{}: gradient vs finite differences, relative error {eg:e}",
+        p.name()
+    );
+    assert!(
+        eh < 1e-5,
+        "{}: Hessian vs finite differences, relative error {eh:e}",
+        p.name()
+    );
+    assert!(
+        ef < 1e-9,
+        "{}: generated derivatives vs hyper-duals, relative error {ef:e}",
+        p.name()
+    );
+}

@@ -1,0 +1,9 @@
+//! Stark-rs: strongly coupled simulation of rigid and deformable bodies with frictional contact.
+//!
+//! Every phenomenon is an energy written in world positions; one Newton solve per time step
+//! minimises their sum over the end-of-step velocities (DESIGN.md §2).
+#![warn(missing_docs)]
+
+pub mod energy;
+pub mod solver;
+pub mod state;
