@@ -4,6 +4,14 @@
 //! minimises their sum over the end-of-step velocities (DESIGN.md §2).
 #![warn(missing_docs)]
 
+pub mod deformables;
 pub mod energy;
+pub mod error;
+pub mod generated;
+pub mod geometry;
+pub mod io;
+pub mod presets;
 pub mod solver;
 pub mod state;
+
+pub use error::{Result, StarkError};

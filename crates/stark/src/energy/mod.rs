@@ -14,5 +14,5 @@ pub mod testing;
 pub use dual::HyperDual;
 pub use potential::{Node, Potential, PotentialTerm, Stencil};
 pub use scalar::Scalar;
-pub use tensor::{Mat, Mat2, Mat3, Mat32, Vec3};
+pub use tensor::{flat_from_points, points_from_flat, Mat, Mat2, Mat3, Mat32, Vec3};
 pub use term::{EnergyTerm, EvalMode, StepCheck};

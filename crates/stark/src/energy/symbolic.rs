@@ -652,12 +652,22 @@ fn emit(g: &Graph, spec: &KernelSpec, value: Id, grad: &[Id], hess: &[Vec<Id>]) 
         live[id.0 as usize] = true;
         stack.extend(g.children(id).into_iter().flatten());
     }
+    // Temporaries live in one local array rather than one `let` each: thousands of `let`s nest
+    // scopes deeply enough to overflow rustc's stack.
+    let mut slot = vec![u32::MAX; limit];
+    let mut n_slots = 0u32;
+    for (idx, &is_live) in live.iter().enumerate() {
+        if is_live && !matches!(g.ops[idx], Op::Const(_) | Op::Input(_) | Op::Param(_)) {
+            slot[idx] = n_slots;
+            n_slots += 1;
+        }
+    }
     let name_of = |id: Id| -> String {
         match g.ops[id.0 as usize] {
             Op::Const(bits) => literal(f64::from_bits(bits)),
             Op::Input(i) => format!("x[{i}]"),
             Op::Param(k) => format!("p[{k}]"),
-            _ => format!("t{}", id.0),
+            _ => format!("t[{}]", slot[id.0 as usize]),
         }
     };
     let mut body = String::new();
@@ -692,7 +702,7 @@ fn emit(g: &Graph, spec: &KernelSpec, value: Id, grad: &[Id], hess: &[Vec<Id>]) 
             }
         };
         count += 1;
-        let _ = writeln!(body, "    let {} = {};", name_of(id), expr);
+        let _ = writeln!(body, "    {} = {};", name_of(id), expr);
     }
     let mut out = String::new();
     let _ = writeln!(
@@ -727,6 +737,7 @@ fn emit(g: &Graph, spec: &KernelSpec, value: Id, grad: &[Id], hess: &[Vec<Id>]) 
         "    let hess: &mut [f64; {}] = hess.try_into().expect(\"Hessian length\");",
         n * n
     );
+    let _ = writeln!(out, "    let mut t = [0.0f64; {}];", n_slots.max(1));
     out.push_str(&body);
     for (i, &gi) in grad.iter().enumerate() {
         let _ = writeln!(out, "    grad[{i}] = {};", name_of(gi));
@@ -885,6 +896,7 @@ mod tests {
         let code = generate_kernel(&spec);
         assert!(code.contains("pub fn quad("));
         assert!(code.contains("grad[1] = x[0];"), "{code}");
+        assert!(!code.contains("let t"), "{code}");
         // ∂²/∂x0² = 2 p0 is emitted as an expression of p[0].
         assert!(code.contains("hess[0] = "), "{code}");
         assert!(code.contains("hess[3] = 0.0;"), "{code}");

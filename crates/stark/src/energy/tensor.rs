@@ -280,3 +280,15 @@ impl<S: Scalar> Mat2<S> {
         [(a + b + delta) * 0.5, (a + b - delta) * 0.5]
     }
 }
+
+/// View a flat coordinate slice `[x0, y0, z0, x1, …]` as `N` points (used by traced kernels).
+pub fn points_from_flat<S: Scalar, const N: usize>(x: &[S]) -> [Vec3<S>; N] {
+    std::array::from_fn(|a| Vec3([x[3 * a], x[3 * a + 1], x[3 * a + 2]]))
+}
+
+/// Flatten `N` points to `[x0, y0, z0, x1, …]`.
+pub fn flat_from_points<const N: usize>(x: &[nalgebra::Vector3<f64>; N], out: &mut [f64]) {
+    for (a, p) in x.iter().enumerate() {
+        out[3 * a..3 * a + 3].copy_from_slice(p.as_slice());
+    }
+}

@@ -1,0 +1,523 @@
+//! Volumetric solids: Stable Neo-Hookean strain energy of linear tetrahedra, with strain-rate
+//! damping and strain limiting.
+//!
+//! Energy per tet, times the rest volume `V` (Smith et al. 2022, "Stable Neo-Hookean Flesh
+//! Simulation", eq. 49; the same form as the original Stark):
+//!
+//! `ψ(F) = μ'/2 (I_C − 3) + λ'/2 (J − α)² − μ'/2 ln(I_C + 1)`, with `F = D_s D_m⁻¹`,
+//! `I_C = ‖F‖²_F`, `J = det F`, `μ' = 4μ/3`, `λ' = λ + 5μ/6`, `α = 1 + 3μ'/(4λ')` (so the rest
+//! state is stress free), and the Lamé parameters of Young's modulus `E` and Poisson's ratio `ν`.
+//!
+//! Damping is a Rayleigh dissipation `½ c ‖Ė‖²` on the Green strain rate `Ė ≈ (E₁ − E₀)/dt`; in
+//! the velocity-form objective it enters as `dt · ½ c ‖Ė‖² = ½ (c/dt) ‖E₁ − E₀‖²`, so the damping
+//! stress `c Ė` does not depend on the step size. (Stark omits the factor `dt`, so its damping
+//! grows as `1/dt`.)
+//!
+//! Strain limiting adds `k (λ̃ − ε_max)³/3` when a smooth upper bound of the largest principal
+//! Green strain, `λ̃ = tr E/3 + √(2/3) ‖dev E‖`, exceeds the limit.
+
+use super::{globalize, Groups, NodeSetHandle};
+use crate::energy::symbolic::KernelSpec;
+use crate::energy::{
+    flat_from_points, points_from_flat, HyperDual, Mat, Mat3, Node, Potential, Scalar, Stencil,
+    Vec3,
+};
+use crate::error::{check_param, Result, StarkError};
+use crate::generated;
+use crate::state::NodeArrays;
+use nalgebra::{Matrix3, Vector3};
+use serde::{Deserialize, Serialize};
+
+/// Material of a tetrahedral solid.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct TetStrainParams {
+    /// Young's modulus, Pa (default: 1e3).
+    pub youngs_modulus: f64,
+    /// Poisson's ratio, unitless in (0, 0.5) (default: 0.3).
+    pub poissons_ratio: f64,
+    /// Strain-rate damping coefficient `c`, Pa·s (default: 0).
+    pub damping: f64,
+    /// Green strain above which the strain-limiting penalty acts, unitless (default: ∞, off).
+    pub strain_limit: f64,
+    /// Stiffness of the strain-limiting penalty, Pa (default: 1e3).
+    pub strain_limit_stiffness: f64,
+    /// Uniform scale of the rest shape (growth or shrinkage), unitless (default: 1).
+    pub scale: f64,
+}
+
+impl Default for TetStrainParams {
+    fn default() -> Self {
+        TetStrainParams {
+            youngs_modulus: 1e3,
+            poissons_ratio: 0.3,
+            damping: 0.0,
+            strain_limit: f64::INFINITY,
+            strain_limit_stiffness: 1e3,
+            scale: 1.0,
+        }
+    }
+}
+
+impl TetStrainParams {
+    /// Check every field; the error names `object` and the field.
+    pub fn validate(&self, object: &str) -> Result<()> {
+        let e = self.youngs_modulus;
+        check_param(
+            object,
+            "youngs_modulus",
+            e,
+            e > 0.0 && e.is_finite(),
+            "must be positive and finite (Pa)",
+        )?;
+        let nu = self.poissons_ratio;
+        check_param(
+            object,
+            "poissons_ratio",
+            nu,
+            nu > 0.0 && nu < 0.5,
+            "must lie in (0, 0.5)",
+        )?;
+        let c = self.damping;
+        check_param(
+            object,
+            "damping",
+            c,
+            c >= 0.0 && c.is_finite(),
+            "must be non-negative and finite (Pa·s)",
+        )?;
+        check_param(
+            object,
+            "strain_limit",
+            self.strain_limit,
+            self.strain_limit > 0.0,
+            "must be positive (∞ disables it)",
+        )?;
+        let k = self.strain_limit_stiffness;
+        check_param(
+            object,
+            "strain_limit_stiffness",
+            k,
+            k >= 0.0 && k.is_finite(),
+            "must be non-negative and finite (Pa)",
+        )?;
+        let s = self.scale;
+        check_param(
+            object,
+            "scale",
+            s,
+            s > 0.0 && s.is_finite(),
+            "must be positive and finite",
+        )
+    }
+
+    /// Lamé parameters `(μ, λ)` in Pa.
+    pub fn lame(&self) -> (f64, f64) {
+        let (e, nu) = (self.youngs_modulus, self.poissons_ratio);
+        (
+            e / (2.0 * (1.0 + nu)),
+            e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)),
+        )
+    }
+
+    fn needs_full_kernel(&self) -> bool {
+        self.damping > 0.0 || self.strain_limit.is_finite()
+    }
+}
+
+/// Handle to a group of tets added together.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub struct TetStrainHandle(pub u32);
+
+/// Rest data of one tet.
+#[derive(Clone, Copy, Debug)]
+struct TetRest {
+    /// `D_m⁻¹` at scale 1, row-major.
+    dm_inv: [[f64; 3]; 3],
+    /// Rest volume at scale 1, m³.
+    volume: f64,
+}
+
+/// The Stable Neo-Hookean tet energy of all volumetric objects.
+#[derive(Default)]
+pub struct TetStrain {
+    groups: Groups<TetStrainParams>,
+    tets: Vec<[u32; 4]>,
+    group: Vec<u32>,
+    rest: Vec<TetRest>,
+    version: u64,
+}
+
+/// Parameters of the elastic kernel: `D_m⁻¹` (9), `V`, `μ'`, `λ'`, `α`.
+pub const ELASTIC_PARAMS: usize = 13;
+/// Parameters of the full kernel: elastic ones, then `c/dt`, `E₀` (xx, yy, zz, xy, yz, zx),
+/// `ε_max`, `k`.
+pub const FULL_PARAMS: usize = 22;
+
+/// Energy of one tet (J) in terms of its node positions and kernel parameters.
+pub fn tet_energy<S: Scalar>(x: &[Vec3<S>; 4], p: &[S], full: bool) -> S {
+    let ds = Mat3::from_columns3([x[1] - x[0], x[2] - x[0], x[3] - x[0]]);
+    let dm_inv: Mat3<S> = Mat([[p[0], p[1], p[2]], [p[3], p[4], p[5]], [p[6], p[7], p[8]]]);
+    let (volume, mu_, lambda_, alpha) = (p[9], p[10], p[11], p[12]);
+    let f = ds.mul_mat(&dm_inv);
+    let ic = f.frobenius_norm_sq();
+    let j = f.det();
+    let mut psi =
+        mu_ * (ic - 3.0) * 0.5 + lambda_ * (j - alpha).sq() * 0.5 - mu_ * (ic + 1.0).ln() * 0.5;
+    if full {
+        let (c_over_dt, limit, k) = (p[13], p[20], p[21]);
+        let e = f
+            .transpose()
+            .mul_mat(&f)
+            .sub_identity(1.0)
+            .scale(S::constant(0.5));
+        let e0 = [
+            [p[14], p[17], p[19]],
+            [p[17], p[15], p[18]],
+            [p[19], p[18], p[16]],
+        ];
+        let de = e.sub(&Mat(e0));
+        psi += c_over_dt * de.frobenius_norm_sq() * 0.5;
+        let tr = e.trace();
+        let dev = e.sub_identity(0.0).sub(&Mat([
+            [tr * (1.0 / 3.0), S::zero(), S::zero()],
+            [S::zero(), tr * (1.0 / 3.0), S::zero()],
+            [S::zero(), S::zero(), tr * (1.0 / 3.0)],
+        ]));
+        let largest = tr * (1.0 / 3.0) + dev.frobenius_norm_sq().sqrt() * (2.0f64 / 3.0).sqrt();
+        let over = largest - limit;
+        psi += S::select_gt(over, S::zero(), || k * over.powi(3) * (1.0 / 3.0), S::zero);
+    }
+    volume * psi
+}
+
+/// Generated kernel of the elastic-only energy.
+pub const ELASTIC_KERNEL: KernelSpec = KernelSpec {
+    name: "tet_strain_elastic",
+    n_inputs: 12,
+    n_params: ELASTIC_PARAMS,
+    energy: |x, p| tet_energy(&points_from_flat(x), p, false),
+};
+/// Generated kernel with damping and strain limiting.
+pub const FULL_KERNEL: KernelSpec = KernelSpec {
+    name: "tet_strain_full",
+    n_inputs: 12,
+    n_params: FULL_PARAMS,
+    energy: |x, p| tet_energy(&points_from_flat(x), p, true),
+};
+
+impl TetStrain {
+    /// Add the tets of an object (indices local to `set`).
+    pub fn add(
+        &mut self,
+        nodes: &NodeArrays,
+        set: NodeSetHandle,
+        label: &str,
+        tets: &[[usize; 4]],
+        params: TetStrainParams,
+    ) -> Result<TetStrainHandle> {
+        params.validate(label)?;
+        let global = globalize(&set, label, "tet", tets)?;
+        let mut rest = Vec::with_capacity(global.len());
+        for (index, t) in global.iter().enumerate() {
+            let x = t.map(|i| nodes.rest[i as usize]);
+            let dm = Matrix3::from_columns(&[x[1] - x[0], x[2] - x[0], x[3] - x[0]]);
+            let volume = dm.determinant() / 6.0;
+            let size = (x[1] - x[0])
+                .norm()
+                .max((x[2] - x[0]).norm())
+                .max((x[3] - x[0]).norm());
+            if !(volume > 1e-14 * size.powi(3)) {
+                let detail = if volume < 0.0 {
+                    format!("rest volume {volume:e} m³ is negative (inverted tet: swap two nodes)")
+                } else {
+                    format!("rest volume {volume:e} m³ is zero or degenerate")
+                };
+                return Err(StarkError::BadElement {
+                    object: label.to_string(),
+                    kind: "tet",
+                    index,
+                    detail,
+                });
+            }
+            let inv = dm.try_inverse().expect("non-degenerate");
+            let dm_inv = std::array::from_fn(|i| std::array::from_fn(|j| inv[(i, j)]));
+            rest.push(TetRest { dm_inv, volume });
+        }
+        let g = self.groups.push(label, params);
+        self.tets.extend(global);
+        self.group.extend(std::iter::repeat_n(g, rest.len()));
+        self.rest.extend(rest);
+        self.version += 1;
+        Ok(TetStrainHandle(g))
+    }
+
+    /// Parameters of a group.
+    pub fn params(&self, h: TetStrainHandle) -> Result<&TetStrainParams> {
+        Ok(&self.groups.params[self.groups.check("tet strain", h.0)?])
+    }
+
+    /// Change the parameters of a group (validated).
+    pub fn set_params(&mut self, h: TetStrainHandle, params: TetStrainParams) -> Result<()> {
+        let i = self.groups.check("tet strain", h.0)?;
+        params.validate(&self.groups.labels[i])?;
+        self.groups.params[i] = params;
+        Ok(())
+    }
+
+    /// Number of tets with an inverted or flat current configuration (`det F ≤ 0`) at positions `x`.
+    pub fn count_inverted(&self, x: &[Vector3<f64>]) -> usize {
+        self.tets
+            .iter()
+            .filter(|t| {
+                let p = t.map(|i| x[i as usize]);
+                (p[1] - p[0]).cross(&(p[2] - p[0])).dot(&(p[3] - p[0])) <= 0.0
+            })
+            .count()
+    }
+
+    /// Kernel parameters of tet `e`; the second value tells whether the full kernel applies.
+    fn kernel_params(&self, e: usize, stencil: &Stencil<4>) -> ([f64; FULL_PARAMS], bool) {
+        let params = &self.groups.params[self.group[e] as usize];
+        let rest = &self.rest[e];
+        let s = params.scale;
+        let (mu, lambda) = params.lame();
+        let mu_ = 4.0 / 3.0 * mu;
+        let lambda_ = lambda + 5.0 / 6.0 * mu;
+        let alpha = 1.0 + 0.75 * mu_ / lambda_;
+        let mut p = [0.0; FULL_PARAMS];
+        for i in 0..3 {
+            for j in 0..3 {
+                p[3 * i + j] = rest.dm_inv[i][j] / s;
+            }
+        }
+        p[9] = rest.volume * s * s * s;
+        p[10] = mu_;
+        p[11] = lambda_;
+        p[12] = alpha;
+        let full = params.needs_full_kernel();
+        if full {
+            let x0 = stencil.x0;
+            let ds0 = Matrix3::from_columns(&[x0[1] - x0[0], x0[2] - x0[0], x0[3] - x0[0]]);
+            let dm_inv = Matrix3::from_fn(|i, j| p[3 * i + j]);
+            let f0 = ds0 * dm_inv;
+            let e0 = 0.5 * (f0.transpose() * f0 - Matrix3::identity());
+            p[13] = params.damping / stencil.dt;
+            p[14] = e0[(0, 0)];
+            p[15] = e0[(1, 1)];
+            p[16] = e0[(2, 2)];
+            p[17] = e0[(0, 1)];
+            p[18] = e0[(1, 2)];
+            p[19] = e0[(0, 2)];
+            p[20] = params.strain_limit;
+            p[21] = params.strain_limit_stiffness;
+        }
+        (p, full)
+    }
+}
+
+impl Potential<4> for TetStrain {
+    fn name(&self) -> &str {
+        "tet strain"
+    }
+    fn num_elements(&self) -> usize {
+        self.tets.len()
+    }
+    fn nodes(&self, e: usize) -> [Node; 4] {
+        self.tets[e].map(Node::Point)
+    }
+    fn energy<S: Scalar>(&self, e: usize, x: &[Vec3<S>; 4], stencil: &Stencil<4>) -> S {
+        let (p, full) = self.kernel_params(e, stencil);
+        let ps = p.map(S::constant);
+        tet_energy(x, &ps, full)
+    }
+    fn derivatives(&self, e: usize, stencil: &Stencil<4>, out: &mut HyperDual<4>) -> bool {
+        let (p, full) = self.kernel_params(e, stencil);
+        let mut x = [0.0; 12];
+        flat_from_points(&stencil.x, &mut x);
+        let grad = out.grad.as_flattened_mut();
+        let hess = out
+            .hess
+            .as_flattened_mut()
+            .as_flattened_mut()
+            .as_flattened_mut();
+        out.value = if full {
+            generated::tet_strain_full(&x, &p, grad, hess)
+        } else {
+            generated::tet_strain_elastic(&x, &p[..ELASTIC_PARAMS], grad, hess)
+        };
+        true
+    }
+    fn topology_version(&self) -> u64 {
+        self.version
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::energy::testing::{assert_derivatives, TestState};
+    use rand::{Rng, SeedableRng};
+
+    fn random_state(seed: u64, stretch: f64) -> (TetStrain, TestState) {
+        let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
+        let mut r = |s: f64| {
+            Vector3::new(
+                rng.random_range(-s..s),
+                rng.random_range(-s..s),
+                rng.random_range(-s..s),
+            )
+        };
+        let rest = vec![
+            Vector3::new(0.0, 0.0, 0.0) + r(0.02),
+            Vector3::new(0.1, 0.0, 0.0) + r(0.02),
+            Vector3::new(0.0, 0.1, 0.0) + r(0.02),
+            Vector3::new(0.0, 0.0, 0.1) + r(0.02),
+        ];
+        let x0: Vec<_> = rest.iter().map(|p| p * stretch + r(0.005)).collect();
+        let v0 = vec![Vector3::zeros(); 4];
+        let v: Vec<_> = (0..4).map(|_| r(0.3)).collect();
+        let state = TestState::new(rest.clone(), x0, v0, v, 0.01);
+        let mut nodes = NodeArrays::default();
+        let set = NodeSetHandle {
+            index: 0,
+            first: nodes.push(&rest) as u32,
+            len: 4,
+        };
+        let mut tets = TetStrain::default();
+        let p = TetStrainParams {
+            youngs_modulus: 1e4,
+            damping: 20.0,
+            strain_limit: 0.05,
+            strain_limit_stiffness: 1e5,
+            ..Default::default()
+        };
+        tets.add(&nodes, set, "t", &[[0, 1, 2, 3]], p.clone())
+            .unwrap();
+        tets.add(
+            &nodes,
+            set,
+            "elastic",
+            &[[0, 1, 2, 3]],
+            TetStrainParams {
+                youngs_modulus: 2e3,
+                poissons_ratio: 0.45,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        (tets, state)
+    }
+
+    #[test]
+    fn derivatives_match_finite_differences() {
+        for seed in 0..8 {
+            // Strain limit inactive (1.0) and active (1.6) stretch.
+            for stretch in [1.0, 1.6] {
+                let (tets, state) = random_state(seed, stretch);
+                assert_derivatives(&tets, &state.eval(), 1e-6);
+            }
+        }
+    }
+
+    #[test]
+    fn rest_state_is_stress_free() {
+        let (tets, _) = random_state(3, 1.0);
+        let rest = tets.rest[0];
+        let _ = rest;
+        let (_, state) = random_state(3, 1.0);
+        let mut st = TestState::new(
+            state.nodes.rest.clone(),
+            state.nodes.rest.clone(),
+            vec![Vector3::zeros(); 4],
+            vec![Vector3::zeros(); 4],
+            0.01,
+        );
+        st.gravity = Vector3::zeros();
+        let eval = st.eval();
+        let stencil = Stencil::new(tets.nodes(1), &eval);
+        let d = crate::energy::potential::dual_derivatives(&tets, 1, &stencil);
+        assert!(
+            d.gradient_flat().iter().all(|g| g.abs() < 1e-10),
+            "{:?}",
+            d.grad
+        );
+    }
+
+    #[test]
+    fn bad_input_is_a_clear_error() {
+        let mut nodes = NodeArrays::default();
+        let rest = [Vector3::zeros(), Vector3::x(), Vector3::y(), Vector3::z()];
+        let set = NodeSetHandle {
+            index: 0,
+            first: nodes.push(&rest) as u32,
+            len: 4,
+        };
+        let mut tets = TetStrain::default();
+        let err = tets
+            .add(
+                &nodes,
+                set,
+                "cup",
+                &[[0, 2, 1, 3]],
+                TetStrainParams::default(),
+            )
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("tet 0 of 'cup'") && err.contains("negative"),
+            "{err}"
+        );
+        let flat = [
+            Vector3::zeros(),
+            Vector3::x(),
+            Vector3::y(),
+            Vector3::new(1.0, 1.0, 0.0),
+        ];
+        let set2 = NodeSetHandle {
+            index: 1,
+            first: nodes.push(&flat) as u32,
+            len: 4,
+        };
+        let err = tets
+            .add(
+                &nodes,
+                set2,
+                "flat",
+                &[[0, 1, 2, 3]],
+                TetStrainParams::default(),
+            )
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("zero or degenerate"), "{err}");
+        let bad = TetStrainParams {
+            youngs_modulus: f64::NAN,
+            ..Default::default()
+        };
+        let err = tets
+            .add(&nodes, set, "cube", &[[0, 1, 2, 3]], bad)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("`youngs_modulus` = NaN on 'cube'"), "{err}");
+        let bad = TetStrainParams {
+            youngs_modulus: -5.0,
+            ..Default::default()
+        };
+        assert!(tets
+            .add(&nodes, set, "cube", &[[0, 1, 2, 3]], bad)
+            .unwrap_err()
+            .to_string()
+            .contains("must be positive"));
+        let err = tets
+            .add(
+                &nodes,
+                set,
+                "cube",
+                &[[0, 1, 2, 7]],
+                TetStrainParams::default(),
+            )
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("refers to node 7"), "{err}");
+    }
+}

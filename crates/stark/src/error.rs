@@ -1,0 +1,115 @@
+//! Errors a user can act on: each names the object and the field or element at fault.
+
+/// Everything that can go wrong in the library.
+#[derive(Debug, thiserror::Error)]
+pub enum StarkError {
+    /// A parameter value is out of its valid range.
+    #[error("`{field}` = {value} on '{object}' {expected}")]
+    InvalidParameter {
+        /// Object label.
+        object: String,
+        /// Parameter name.
+        field: &'static str,
+        /// The offending value.
+        value: f64,
+        /// What was expected, e.g. "must lie in (0, 0.5)".
+        expected: &'static str,
+    },
+    /// A rest element is degenerate or inverted.
+    #[error("{kind} {index} of '{object}': {detail}")]
+    BadElement {
+        /// Object label.
+        object: String,
+        /// Element kind ("tet", "triangle", "segment", "hinge").
+        kind: &'static str,
+        /// Element index within the object.
+        index: usize,
+        /// What is wrong.
+        detail: String,
+    },
+    /// An element refers to a node that does not exist.
+    #[error(
+        "{kind} {index} of '{object}' refers to node {node}, but the object has {n_nodes} nodes"
+    )]
+    NodeOutOfRange {
+        /// Object label.
+        object: String,
+        /// Element kind.
+        kind: &'static str,
+        /// Element index.
+        index: usize,
+        /// The node index.
+        node: usize,
+        /// Number of nodes.
+        n_nodes: usize,
+    },
+    /// A handle does not belong to this simulation.
+    #[error("invalid {kind} handle {index}: the simulation has {len}")]
+    InvalidHandle {
+        /// Handle kind.
+        kind: &'static str,
+        /// Index in the handle.
+        index: usize,
+        /// Number of valid objects of that kind.
+        len: usize,
+    },
+    /// Invalid input that is not a single parameter.
+    #[error("{0}")]
+    InvalidInput(String),
+    /// A mesh file could not be read.
+    #[error(transparent)]
+    Mesh(#[from] crate::io::MeshFileError),
+    /// A scene file is invalid.
+    #[error("{0}")]
+    Scene(String),
+    /// Writing output failed.
+    #[error("cannot write '{path}': {source}")]
+    Output {
+        /// The file or directory.
+        path: String,
+        /// The I/O error.
+        source: std::io::Error,
+    },
+    /// The time step could not be completed even at the smallest allowed step size.
+    #[error("time step at t = {time_s:.6} s failed at dt = {dt_s:e} s (below the minimum {dt_min_s:e} s): {reason}")]
+    StepFailed {
+        /// Simulation time, s.
+        time_s: f64,
+        /// Last attempted dt, s.
+        dt_s: f64,
+        /// Minimum dt, s.
+        dt_min_s: f64,
+        /// Why the last attempt failed.
+        reason: String,
+    },
+    /// A checkpoint could not be written or read.
+    #[error("checkpoint '{path}': {message}")]
+    Checkpoint {
+        /// The file.
+        path: String,
+        /// What went wrong.
+        message: String,
+    },
+}
+
+/// Result with [`StarkError`].
+pub type Result<T, E = StarkError> = std::result::Result<T, E>;
+
+/// Check that `value` is finite and satisfies `ok`; otherwise an [`StarkError::InvalidParameter`].
+pub fn check_param(
+    object: &str,
+    field: &'static str,
+    value: f64,
+    ok: bool,
+    expected: &'static str,
+) -> Result<()> {
+    if value.is_nan() || !ok {
+        return Err(StarkError::InvalidParameter {
+            object: object.to_string(),
+            field,
+            value,
+            expected,
+        });
+    }
+    Ok(())
+}

@@ -1,0 +1,8 @@
+//! Ready-made geometry: mesh generators reproducing Stark's conventions.
+
+pub mod meshes;
+
+pub use meshes::{
+    box_mesh, cylinder_mesh, cylindrical_triangle_grid, segment_line, sphere_mesh, tet_grid,
+    torus_mesh, triangle_grid, Mesh, SegmentMesh, TetMesh, TriangleMesh,
+};
