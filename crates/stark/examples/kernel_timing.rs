@@ -1,59 +1,104 @@
-//! Times one tet's value/gradient/Hessian: generated kernel against hyper-duals.
-use stark::deformables::tet_strain::{tet_energy, ELASTIC_PARAMS, FULL_PARAMS};
-use stark::energy::{HyperDual, Scalar, Vec3};
+//! Times one element's value/gradient/Hessian by each path: generated Ψ(F) kernel with and without
+//! projection, and hyper-duals.
+use nalgebra::Vector3;
+use stark::deformables::{
+    NodeSetHandle, TetStrain, TetStrainParams, TriangleStrain, TriangleStrainParams,
+};
+use stark::energy::potential::{dual_derivatives, element_derivatives};
+use stark::energy::testing::TestState;
+use stark::energy::{Potential, Stencil};
 use std::hint::black_box;
 use std::time::Instant;
 
-fn main() {
-    let x = [
-        0.01, 0.0, 0.0, 0.11, 0.01, 0.0, 0.0, 0.1, 0.02, 0.0, 0.01, 0.1,
-    ];
-    let mut p = [0.0; FULL_PARAMS];
-    for i in 0..3 {
-        p[4 * i] = 10.0;
-    }
-    p[9] = 1.6e-4;
-    p[10] = 4000.0;
-    p[11] = 8000.0;
-    p[12] = 1.3;
-    p[13] = 30.0;
-    p[20] = 0.05;
-    p[21] = 1e5;
-    let mut g = [0.0; 12];
-    let mut h = [0.0; 144];
-    let n = 200_000;
-    for (name, full) in [("elastic", false), ("full", true)] {
+fn time<const N: usize, P: Potential<N>>(name: &str, p: &P, st: &TestState) {
+    let eval = st.eval();
+    let stencil = Stencil::new(p.nodes(0), &eval);
+    let n = 100_000;
+    for (label, project) in [("exact", false), ("projected", true)] {
         let t = Instant::now();
         let mut acc = 0.0;
         for _ in 0..n {
-            let v = if full {
-                stark::generated::tet_strain_full(black_box(&x), black_box(&p), &mut g, &mut h)
-            } else {
-                stark::generated::tet_strain_elastic(
-                    black_box(&x),
-                    black_box(&p[..ELASTIC_PARAMS]),
-                    &mut g,
-                    &mut h,
-                )
-            };
-            acc += v + h[17];
+            let (d, _) = element_derivatives(p, 0, black_box(&stencil), project);
+            acc += d.hess[0][0][0][0];
         }
-        let gen = t.elapsed().as_secs_f64() / n as f64;
-        let t = Instant::now();
-        for _ in 0..n / 10 {
-            let xs: [Vec3<HyperDual<4>>; 4] = std::array::from_fn(|a| {
-                Vec3(std::array::from_fn(|i| {
-                    HyperDual::variable(x[3 * a + i], a, i)
-                }))
-            });
-            let ps = p.map(HyperDual::<4>::constant);
-            acc += tet_energy(black_box(&xs), &ps, full).value;
-        }
-        let dual = t.elapsed().as_secs_f64() / (n / 10) as f64;
         println!(
-            "tet {name}: generated {:.3} µs, hyper-dual {:.3} µs ({acc:.1})",
-            gen * 1e6,
-            dual * 1e6
+            "{name} generated ({label}): {:.3} µs ({acc:.2e})",
+            t.elapsed().as_secs_f64() / n as f64 * 1e6
         );
     }
+    let t = Instant::now();
+    let mut acc = 0.0;
+    for _ in 0..n / 10 {
+        acc += dual_derivatives(p, 0, black_box(&stencil)).value;
+    }
+    println!(
+        "{name} hyper-dual: {:.3} µs ({acc:.2e})",
+        t.elapsed().as_secs_f64() / (n / 10) as f64 * 1e6
+    );
+}
+
+fn main() {
+    let rest = vec![
+        Vector3::new(0.0, 0.0, 0.0),
+        Vector3::new(0.1, 0.0, 0.0),
+        Vector3::new(0.0, 0.1, 0.0),
+        Vector3::new(0.0, 0.0, 0.1),
+    ];
+    let x0: Vec<_> = rest
+        .iter()
+        .map(|p| p * 1.02 + Vector3::new(0.001, -0.002, 0.0))
+        .collect();
+    let v = vec![
+        Vector3::new(0.1, 0.0, -0.2),
+        Vector3::new(0.0, 0.3, 0.1),
+        Vector3::new(-0.1, 0.1, 0.0),
+        Vector3::new(0.2, 0.0, 0.1),
+    ];
+    let st = TestState::new(rest.clone(), x0, vec![Vector3::zeros(); 4], v, 1.0 / 30.0);
+    let set = NodeSetHandle {
+        index: 0,
+        first: 0,
+        len: 4,
+    };
+    for (name, params) in [
+        (
+            "tet elastic",
+            TetStrainParams {
+                youngs_modulus: 1e4,
+                ..Default::default()
+            },
+        ),
+        (
+            "tet damped",
+            TetStrainParams {
+                youngs_modulus: 1e4,
+                damping: 10.0,
+                ..Default::default()
+            },
+        ),
+        (
+            "tet limited",
+            TetStrainParams {
+                youngs_modulus: 1e4,
+                damping: 10.0,
+                strain_limit: 0.001,
+                ..Default::default()
+            },
+        ),
+    ] {
+        let mut tets = TetStrain::default();
+        tets.add(&st.nodes, set, "t", &[[0, 1, 2, 3]], params)
+            .unwrap();
+        time(name, &tets, &st);
+    }
+    let mut tris = TriangleStrain::default();
+    let p = TriangleStrainParams {
+        youngs_modulus: 5e3,
+        damping: 0.5,
+        strain_limit: 0.1,
+        strain_limit_stiffness: 1e6,
+        ..Default::default()
+    };
+    tris.add(&st.nodes, set, "c", &[[0, 1, 2]], p).unwrap();
+    time("triangle cotton", &tris, &st);
 }

@@ -11,7 +11,11 @@ pub mod generated;
 pub mod geometry;
 pub mod io;
 pub mod presets;
+pub mod scenes;
+pub mod simulation;
 pub mod solver;
 pub mod state;
 
 pub use error::{Result, StarkError};
+pub use simulation::{RunSummary, Simulation, StepReport};
+pub use solver::Settings;

@@ -7,8 +7,8 @@
 use super::{Groups, NodeSetHandle};
 use crate::energy::symbolic::KernelSpec;
 use crate::energy::{
-    flat_from_points, points_from_flat, EnergyTerm, HyperDual, Node, Potential, PotentialTerm,
-    Scalar, Stencil, StepCheck, Vec3,
+    flat_from_points, points_from_flat, EnergyTerm, FastDerivatives, HyperDual, Node, Potential,
+    PotentialTerm, Scalar, Stencil, StepCheck, Vec3,
 };
 use crate::error::{check_param, Result, StarkError};
 use crate::generated;
@@ -177,7 +177,13 @@ impl<const N: usize> Potential<N> for AttachmentSet<N> {
     fn energy<S: Scalar>(&self, e: usize, x: &[Vec3<S>; N], _stencil: &Stencil<N>) -> S {
         attachment_energy(x, &self.kernel_params(e).map(S::constant))
     }
-    fn derivatives(&self, e: usize, stencil: &Stencil<N>, out: &mut HyperDual<N>) -> bool {
+    fn derivatives(
+        &self,
+        e: usize,
+        stencil: &Stencil<N>,
+        _project: bool,
+        out: &mut HyperDual<N>,
+    ) -> FastDerivatives {
         let p = self.kernel_params(e);
         let mut x = [0.0; 12];
         flat_from_points(&stencil.x, &mut x);
@@ -191,12 +197,15 @@ impl<const N: usize> Potential<N> for AttachmentSet<N> {
             2 => generated::attachment_point_point(&x[..6], &p, grad, hess),
             3 => generated::attachment_point_edge(&x[..9], &p, grad, hess),
             4 => generated::attachment_point_triangle(&x[..12], &p, grad, hess),
-            _ => return false,
+            _ => return FastDerivatives::Unavailable,
         };
-        true
+        FastDerivatives::Exact
     }
     fn topology_version(&self) -> u64 {
         self.version
+    }
+    fn is_convex(&self) -> bool {
+        true
     }
     fn check_converged_step(&mut self, state: &EvalState) -> StepCheck {
         let mut hardened = Vec::new();

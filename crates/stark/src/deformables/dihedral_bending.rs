@@ -10,7 +10,8 @@
 use super::{globalize, Groups, NodeSetHandle};
 use crate::energy::symbolic::KernelSpec;
 use crate::energy::{
-    flat_from_points, points_from_flat, HyperDual, Node, Potential, Scalar, Stencil, Vec3,
+    flat_from_points, points_from_flat, FastDerivatives, HyperDual, Node, Potential, Scalar,
+    Stencil, Vec3,
 };
 use crate::error::{check_param, Result, StarkError};
 use crate::generated;
@@ -186,7 +187,13 @@ impl Potential<4> for DihedralBending {
     fn energy<S: Scalar>(&self, e: usize, x: &[Vec3<S>; 4], stencil: &Stencil<4>) -> S {
         dihedral_bending_energy(x, &self.kernel_params(e, stencil).map(S::constant))
     }
-    fn derivatives(&self, e: usize, stencil: &Stencil<4>, out: &mut HyperDual<4>) -> bool {
+    fn derivatives(
+        &self,
+        e: usize,
+        stencil: &Stencil<4>,
+        _project: bool,
+        out: &mut HyperDual<4>,
+    ) -> FastDerivatives {
         let p = self.kernel_params(e, stencil);
         let mut x = [0.0; 12];
         flat_from_points(&stencil.x, &mut x);
@@ -199,7 +206,7 @@ impl Potential<4> for DihedralBending {
                 .as_flattened_mut()
                 .as_flattened_mut(),
         );
-        true
+        FastDerivatives::Exact
     }
     fn topology_version(&self) -> u64 {
         self.version

@@ -10,7 +10,9 @@
 
 use super::{Groups, NodeSetHandle};
 use crate::energy::symbolic::KernelSpec;
-use crate::energy::{points_from_flat, HyperDual, Node, Potential, Scalar, Stencil, Vec3};
+use crate::energy::{
+    points_from_flat, FastDerivatives, HyperDual, Node, Potential, Scalar, Stencil, Vec3,
+};
 use crate::error::{check_param, Result, StarkError};
 use crate::generated;
 use serde::{Deserialize, Serialize};
@@ -207,7 +209,13 @@ impl Potential<1> for LumpedInertia {
     fn energy<S: Scalar>(&self, e: usize, x: &[Vec3<S>; 1], stencil: &Stencil<1>) -> S {
         inertia_energy(x, &self.kernel_params(e, stencil).map(S::constant))
     }
-    fn derivatives(&self, e: usize, stencil: &Stencil<1>, out: &mut HyperDual<1>) -> bool {
+    fn derivatives(
+        &self,
+        e: usize,
+        stencil: &Stencil<1>,
+        _project: bool,
+        out: &mut HyperDual<1>,
+    ) -> FastDerivatives {
         let p = self.kernel_params(e, stencil);
         let x = stencil.x[0];
         out.value = generated::lumped_inertia(
@@ -219,10 +227,13 @@ impl Potential<1> for LumpedInertia {
                 .as_flattened_mut()
                 .as_flattened_mut(),
         );
-        true
+        FastDerivatives::Exact
     }
     fn topology_version(&self) -> u64 {
         self.version
+    }
+    fn is_convex(&self) -> bool {
+        true
     }
 }
 

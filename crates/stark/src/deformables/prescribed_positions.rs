@@ -9,7 +9,7 @@
 use super::{Groups, NodeSetHandle};
 use crate::energy::symbolic::KernelSpec;
 use crate::energy::{
-    points_from_flat, HyperDual, Node, Potential, Scalar, Stencil, StepCheck, Vec3,
+    points_from_flat, FastDerivatives, HyperDual, Node, Potential, Scalar, Stencil, StepCheck, Vec3,
 };
 use crate::error::{check_param, Result, StarkError};
 use crate::generated;
@@ -250,7 +250,13 @@ impl Potential<1> for PrescribedPositions {
         let k = self.groups.params[self.group[e] as usize].stiffness;
         prescribed_energy(x, &[t.x, t.y, t.z, k].map(S::constant))
     }
-    fn derivatives(&self, e: usize, stencil: &Stencil<1>, out: &mut HyperDual<1>) -> bool {
+    fn derivatives(
+        &self,
+        e: usize,
+        stencil: &Stencil<1>,
+        _project: bool,
+        out: &mut HyperDual<1>,
+    ) -> FastDerivatives {
         let t = self.target[e];
         let k = self.groups.params[self.group[e] as usize].stiffness;
         out.value = generated::prescribed_position(
@@ -262,10 +268,13 @@ impl Potential<1> for PrescribedPositions {
                 .as_flattened_mut()
                 .as_flattened_mut(),
         );
-        true
+        FastDerivatives::Exact
     }
     fn topology_version(&self) -> u64 {
         self.version
+    }
+    fn is_convex(&self) -> bool {
+        true
     }
     fn check_converged_step(&mut self, state: &EvalState) -> StepCheck {
         let mut hardened = Vec::new();

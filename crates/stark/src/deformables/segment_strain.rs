@@ -9,7 +9,8 @@
 use super::{globalize, Groups, NodeSetHandle};
 use crate::energy::symbolic::KernelSpec;
 use crate::energy::{
-    flat_from_points, points_from_flat, HyperDual, Node, Potential, Scalar, Stencil, Vec3,
+    flat_from_points, points_from_flat, FastDerivatives, HyperDual, Node, Potential, Scalar,
+    Stencil, Vec3,
 };
 use crate::error::{check_param, Result, StarkError};
 use crate::generated;
@@ -218,7 +219,13 @@ impl Potential<2> for SegmentStrain {
     fn energy<S: Scalar>(&self, e: usize, x: &[Vec3<S>; 2], stencil: &Stencil<2>) -> S {
         segment_energy(x, &self.kernel_params(e, stencil).map(S::constant))
     }
-    fn derivatives(&self, e: usize, stencil: &Stencil<2>, out: &mut HyperDual<2>) -> bool {
+    fn derivatives(
+        &self,
+        e: usize,
+        stencil: &Stencil<2>,
+        _project: bool,
+        out: &mut HyperDual<2>,
+    ) -> FastDerivatives {
         let p = self.kernel_params(e, stencil);
         let mut x = [0.0; 6];
         flat_from_points(&stencil.x, &mut x);
@@ -231,7 +238,7 @@ impl Potential<2> for SegmentStrain {
                 .as_flattened_mut()
                 .as_flattened_mut(),
         );
-        true
+        FastDerivatives::Exact
     }
     fn topology_version(&self) -> u64 {
         self.version

@@ -17,10 +17,10 @@
 //! Green strain, `λ̃ = tr E/3 + √(2/3) ‖dev E‖`, exceeds the limit.
 
 use super::{globalize, Groups, NodeSetHandle};
-use crate::energy::symbolic::KernelSpec;
+use crate::energy::deformation::{deformation_gradient, gradient_weights, map_to_nodes};
+use crate::energy::symbolic::{KernelSpec, Sym};
 use crate::energy::{
-    flat_from_points, points_from_flat, HyperDual, Mat, Mat3, Node, Potential, Scalar, Stencil,
-    Vec3,
+    FastDerivatives, HyperDual, Mat, Mat3, Node, Potential, Scalar, Stencil, Vec3,
 };
 use crate::error::{check_param, Result, StarkError};
 use crate::generated;
@@ -119,10 +119,6 @@ impl TetStrainParams {
             e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)),
         )
     }
-
-    fn needs_full_kernel(&self) -> bool {
-        self.damping > 0.0 || self.strain_limit.is_finite()
-    }
 }
 
 /// Handle to a group of tets added together.
@@ -148,63 +144,95 @@ pub struct TetStrain {
     version: u64,
 }
 
-/// Parameters of the elastic kernel: `D_m⁻¹` (9), `V`, `μ'`, `λ'`, `α`.
-pub const ELASTIC_PARAMS: usize = 13;
-/// Parameters of the full kernel: elastic ones, then `c/dt`, `E₀` (xx, yy, zz, xy, yz, zx),
+/// Parameters of the `Ψ(F)` kernels: `V`, `μ'`, `λ'`, `α`, `c/dt`, `E₀` (xx, yy, zz, xy, yz, zx),
 /// `ε_max`, `k`.
-pub const FULL_PARAMS: usize = 22;
+pub const PSI_PARAMS: usize = 13;
+/// Parameters of the position-space energy: `D_m⁻¹` (9, row-major) then the `Ψ(F)` parameters.
+pub const PARAMS: usize = 9 + PSI_PARAMS;
 
-/// Energy of one tet (J) in terms of its node positions and kernel parameters.
-pub fn tet_energy<S: Scalar>(x: &[Vec3<S>; 4], p: &[S], full: bool) -> S {
-    let ds = Mat3::from_columns3([x[1] - x[0], x[2] - x[0], x[3] - x[0]]);
-    let dm_inv: Mat3<S> = Mat([[p[0], p[1], p[2]], [p[3], p[4], p[5]], [p[6], p[7], p[8]]]);
-    let (volume, mu_, lambda_, alpha) = (p[9], p[10], p[11], p[12]);
-    let f = ds.mul_mat(&dm_inv);
+/// How the strain-limiting term enters a traced energy.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Limiting {
+    /// Left out (the limit is not reached).
+    Off,
+    /// Decided inside the energy with a branch (the oracle).
+    Branch,
+    /// Included unconditionally (the limit is exceeded).
+    Active,
+}
+
+/// Smooth upper bound `tr E/3 + √(2/3) ‖dev E‖` of the largest principal Green strain. A tiny
+/// regulariser (1e-10 in strain) keeps it differentiable at pure dilation.
+fn largest_strain_bound<S: Scalar>(e: &Mat3<S>) -> S {
+    let third = e.trace() * (1.0 / 3.0);
+    let dev_sq = e.sub_identity(0.0).frobenius_norm_sq() - third.sq() * 3.0;
+    third + (dev_sq + 1e-20).sqrt() * (2.0f64 / 3.0).sqrt()
+}
+
+/// Energy `V ψ(F)` of one tet given its deformation gradient (J).
+pub fn tet_psi<S: Scalar>(f: &Mat3<S>, p: &[S], damped: bool, limiting: Limiting) -> S {
+    let (volume, mu_, lambda_, alpha) = (p[0], p[1], p[2], p[3]);
     let ic = f.frobenius_norm_sq();
     let j = f.det();
     let mut psi =
         mu_ * (ic - 3.0) * 0.5 + lambda_ * (j - alpha).sq() * 0.5 - mu_ * (ic + 1.0).ln() * 0.5;
-    if full {
-        let (c_over_dt, limit, k) = (p[13], p[20], p[21]);
+    if damped || limiting != Limiting::Off {
         let e = f
             .transpose()
-            .mul_mat(&f)
+            .mul_mat(f)
             .sub_identity(1.0)
             .scale(S::constant(0.5));
-        let e0 = [
-            [p[14], p[17], p[19]],
-            [p[17], p[15], p[18]],
-            [p[19], p[18], p[16]],
-        ];
-        let de = e.sub(&Mat(e0));
-        psi += c_over_dt * de.frobenius_norm_sq() * 0.5;
-        let tr = e.trace();
-        let dev = e.sub_identity(0.0).sub(&Mat([
-            [tr * (1.0 / 3.0), S::zero(), S::zero()],
-            [S::zero(), tr * (1.0 / 3.0), S::zero()],
-            [S::zero(), S::zero(), tr * (1.0 / 3.0)],
-        ]));
-        let largest = tr * (1.0 / 3.0) + dev.frobenius_norm_sq().sqrt() * (2.0f64 / 3.0).sqrt();
-        let over = largest - limit;
-        psi += S::select_gt(over, S::zero(), || k * over.powi(3) * (1.0 / 3.0), S::zero);
+        if damped {
+            let e0 = [[p[5], p[8], p[10]], [p[8], p[6], p[9]], [p[10], p[9], p[7]]];
+            psi += p[4] * e.sub(&Mat(e0)).frobenius_norm_sq() * 0.5;
+        }
+        let (limit, k) = (p[11], p[12]);
+        let over = largest_strain_bound(&e) - limit;
+        match limiting {
+            Limiting::Off => {}
+            Limiting::Active => psi += k * over.powi(3) * (1.0 / 3.0),
+            Limiting::Branch => {
+                psi += S::select_gt(over, S::zero(), || k * over.powi(3) * (1.0 / 3.0), S::zero)
+            }
+        }
     }
     volume * psi
 }
 
-/// Generated kernel of the elastic-only energy.
-pub const ELASTIC_KERNEL: KernelSpec = KernelSpec {
-    name: "tet_strain_elastic",
-    n_inputs: 12,
-    n_params: ELASTIC_PARAMS,
-    energy: |x, p| tet_energy(&points_from_flat(x), p, false),
-};
-/// Generated kernel with damping and strain limiting.
-pub const FULL_KERNEL: KernelSpec = KernelSpec {
-    name: "tet_strain_full",
-    n_inputs: 12,
-    n_params: FULL_PARAMS,
-    energy: |x, p| tet_energy(&points_from_flat(x), p, true),
-};
+/// Energy of one tet (J) in terms of its node positions: `F = D_s D_m⁻¹`, then [`tet_psi`].
+pub fn tet_energy<S: Scalar>(x: &[Vec3<S>; 4], p: &[S]) -> S {
+    let ds = Mat3::from_columns3([x[1] - x[0], x[2] - x[0], x[3] - x[0]]);
+    let dm_inv: Mat3<S> = Mat([[p[0], p[1], p[2]], [p[3], p[4], p[5]], [p[6], p[7], p[8]]]);
+    tet_psi(&ds.mul_mat(&dm_inv), &p[9..], true, Limiting::Branch)
+}
+
+fn psi_kernel(name: &'static str, energy: fn(&[Sym], &[Sym]) -> Sym) -> KernelSpec {
+    KernelSpec {
+        name,
+        n_inputs: 9,
+        n_params: PSI_PARAMS,
+        energy,
+    }
+}
+
+fn mat3_from_flat<S: Scalar>(f: &[S]) -> Mat3<S> {
+    Mat([[f[0], f[1], f[2]], [f[3], f[4], f[5]], [f[6], f[7], f[8]]])
+}
+
+/// Generated `Ψ(F)` kernels: elastic only, with damping, and with damping and active limiting.
+pub fn kernels() -> [KernelSpec; 3] {
+    [
+        psi_kernel("tet_psi_elastic", |f, p| {
+            tet_psi(&mat3_from_flat(f), p, false, Limiting::Off)
+        }),
+        psi_kernel("tet_psi_damped", |f, p| {
+            tet_psi(&mat3_from_flat(f), p, true, Limiting::Off)
+        }),
+        psi_kernel("tet_psi_limited", |f, p| {
+            tet_psi(&mat3_from_flat(f), p, true, Limiting::Active)
+        }),
+    ]
+}
 
 impl TetStrain {
     /// Add the tets of an object (indices local to `set`).
@@ -276,16 +304,15 @@ impl TetStrain {
             .count()
     }
 
-    /// Kernel parameters of tet `e`; the second value tells whether the full kernel applies.
-    fn kernel_params(&self, e: usize, stencil: &Stencil<4>) -> ([f64; FULL_PARAMS], bool) {
+    /// Parameters of tet `e` (layout of [`PARAMS`]) and whether it is damped.
+    fn kernel_params(&self, e: usize, stencil: &Stencil<4>) -> ([f64; PARAMS], bool) {
         let params = &self.groups.params[self.group[e] as usize];
         let rest = &self.rest[e];
         let s = params.scale;
         let (mu, lambda) = params.lame();
         let mu_ = 4.0 / 3.0 * mu;
         let lambda_ = lambda + 5.0 / 6.0 * mu;
-        let alpha = 1.0 + 0.75 * mu_ / lambda_;
-        let mut p = [0.0; FULL_PARAMS];
+        let mut p = [0.0; PARAMS];
         for i in 0..3 {
             for j in 0..3 {
                 p[3 * i + j] = rest.dm_inv[i][j] / s;
@@ -294,13 +321,12 @@ impl TetStrain {
         p[9] = rest.volume * s * s * s;
         p[10] = mu_;
         p[11] = lambda_;
-        p[12] = alpha;
-        let full = params.needs_full_kernel();
-        if full {
+        p[12] = 1.0 + 0.75 * mu_ / lambda_;
+        let damped = params.damping > 0.0;
+        if damped {
             let x0 = stencil.x0;
             let ds0 = Matrix3::from_columns(&[x0[1] - x0[0], x0[2] - x0[0], x0[3] - x0[0]]);
-            let dm_inv = Matrix3::from_fn(|i, j| p[3 * i + j]);
-            let f0 = ds0 * dm_inv;
+            let f0 = ds0 * Matrix3::from_fn(|i, j| p[3 * i + j]);
             let e0 = 0.5 * (f0.transpose() * f0 - Matrix3::identity());
             p[13] = params.damping / stencil.dt;
             p[14] = e0[(0, 0)];
@@ -309,10 +335,10 @@ impl TetStrain {
             p[17] = e0[(0, 1)];
             p[18] = e0[(1, 2)];
             p[19] = e0[(0, 2)];
-            p[20] = params.strain_limit;
-            p[21] = params.strain_limit_stiffness;
         }
-        (p, full)
+        p[20] = params.strain_limit;
+        p[21] = params.strain_limit_stiffness;
+        (p, damped)
     }
 }
 
@@ -327,26 +353,42 @@ impl Potential<4> for TetStrain {
         self.tets[e].map(Node::Point)
     }
     fn energy<S: Scalar>(&self, e: usize, x: &[Vec3<S>; 4], stencil: &Stencil<4>) -> S {
-        let (p, full) = self.kernel_params(e, stencil);
-        let ps = p.map(S::constant);
-        tet_energy(x, &ps, full)
+        let (p, _) = self.kernel_params(e, stencil);
+        tet_energy(x, &p.map(S::constant))
     }
-    fn derivatives(&self, e: usize, stencil: &Stencil<4>, out: &mut HyperDual<4>) -> bool {
-        let (p, full) = self.kernel_params(e, stencil);
-        let mut x = [0.0; 12];
-        flat_from_points(&stencil.x, &mut x);
-        let grad = out.grad.as_flattened_mut();
-        let hess = out
-            .hess
-            .as_flattened_mut()
-            .as_flattened_mut()
-            .as_flattened_mut();
-        out.value = if full {
-            generated::tet_strain_full(&x, &p, grad, hess)
-        } else {
-            generated::tet_strain_elastic(&x, &p[..ELASTIC_PARAMS], grad, hess)
+    fn derivatives(
+        &self,
+        e: usize,
+        stencil: &Stencil<4>,
+        project: bool,
+        out: &mut HyperDual<4>,
+    ) -> FastDerivatives {
+        let (p, damped) = self.kernel_params(e, stencil);
+        let dm_inv = [[p[0], p[1], p[2]], [p[3], p[4], p[5]], [p[6], p[7], p[8]]];
+        let w = gradient_weights::<4, 3>(&dm_inv);
+        let mut f = [0.0; 9];
+        deformation_gradient(&w, &stencil.x, &mut f);
+        let psi = &p[9..];
+        let limited = psi[11].is_finite() && {
+            let fm: Mat3<f64> = mat3_from_flat(&f);
+            let e = fm.transpose().mul_mat(&fm).sub_identity(1.0).scale(0.5);
+            largest_strain_bound(&e) > psi[11]
         };
-        true
+        let mut g = [0.0; 9];
+        let mut h = [0.0; 81];
+        let value = if limited {
+            generated::tet_psi_limited(&f, psi, &mut g, &mut h)
+        } else if damped {
+            generated::tet_psi_damped(&f, psi, &mut g, &mut h)
+        } else {
+            generated::tet_psi_elastic(&f, psi, &mut g, &mut h)
+        };
+        map_to_nodes(&w, value, &g, &mut h, project, out);
+        if project {
+            FastDerivatives::Projected
+        } else {
+            FastDerivatives::Exact
+        }
     }
     fn topology_version(&self) -> u64 {
         self.version

@@ -14,10 +14,10 @@
 //! start of the step: the force `p·½(e₁⁰ × e₂⁰)` is shared equally by the three nodes.
 
 use super::{globalize, Groups, NodeSetHandle};
-use crate::energy::symbolic::KernelSpec;
+use crate::energy::deformation::{deformation_gradient, gradient_weights, map_to_nodes};
+use crate::energy::symbolic::{KernelSpec, Sym};
 use crate::energy::{
-    flat_from_points, points_from_flat, HyperDual, Mat, Mat2, Node, Potential, Scalar, Stencil,
-    Vec3,
+    FastDerivatives, HyperDual, Mat, Mat2, Mat32, Node, Potential, Scalar, Stencil, Vec3,
 };
 use crate::error::{check_param, Result, StarkError};
 use crate::generated;
@@ -134,10 +134,6 @@ impl TriangleStrainParams {
         let (e, nu) = (self.youngs_modulus, self.poissons_ratio);
         (e / (2.0 * (1.0 + nu)), e * nu / ((1.0 + nu) * (1.0 - nu)))
     }
-
-    fn needs_full_kernel(&self) -> bool {
-        self.damping > 0.0 || self.strain_limit.is_finite()
-    }
 }
 
 /// Handle to a group of triangles.
@@ -160,49 +156,121 @@ pub struct TriangleStrain {
     version: u64,
 }
 
-/// Elastic kernel parameters: `D_m⁻¹` (4), `h·A`, `μ`, `λ`, inflation force (3).
-pub const ELASTIC_PARAMS: usize = 10;
-/// Full kernel: elastic ones, then `c/dt`, `E₀` (xx, yy, xy), `ε_max`, `k`.
-pub const FULL_PARAMS: usize = 16;
+/// Parameters of the `Ψ(F)` kernels: `h·A`, `μ`, `λ`, `c/dt`, `E₀` (xx, yy, xy), `ε_max`, `k`.
+pub const PSI_PARAMS: usize = 9;
+/// Parameters of the position-space energy: `D_m⁻¹` (4, row-major), the `Ψ(F)` parameters, and
+/// the inflation force (3).
+pub const PARAMS: usize = 4 + PSI_PARAMS + 3;
 
-/// Energy of one triangle (J).
-pub fn triangle_energy<S: Scalar>(x: &[Vec3<S>; 3], p: &[S], full: bool) -> S {
-    let ds = Mat::<S, 3, 2>::from_columns3([x[1] - x[0], x[2] - x[0]]);
-    let dm_inv: Mat2<S> = Mat([[p[0], p[1]], [p[2], p[3]]]);
-    let (h_area, mu, lambda) = (p[4], p[5], p[6]);
-    let f = ds.mul_mat(&dm_inv);
-    let c: Mat2<S> = f.transpose().mul_mat(&f);
+/// Which principal strains exceed the limit (the strain-limiting term of a traced energy).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Limiting {
+    /// Neither.
+    Off,
+    /// Decided inside the energy with branches (the oracle).
+    Branch,
+    /// The larger one only.
+    Largest,
+    /// Both.
+    Both,
+}
+
+/// `Σᵢ (sᵢ − L)³` over both eigenvalues of the symmetric 2×2 `e`, written with its invariants
+/// (`Σ sᵢ = t`, `Σ sᵢ² = t² − 2d`, `Σ sᵢ³ = t³ − 3td`), which stays smooth where they coincide.
+fn both_over_cubed<S: Scalar>(e: &Mat2<S>, limit: S) -> S {
+    let t = e.trace();
+    let d = e.det();
+    (t.powi(3) - t * d * 3.0) - limit * (t.sq() - d * 2.0) * 3.0 + limit.sq() * t * 3.0
+        - limit.powi(3) * 2.0
+}
+
+/// Energy `h A ψ(F)` of one triangle given its 3×2 deformation gradient (J).
+pub fn triangle_psi<S: Scalar>(f: &Mat32<S>, p: &[S], damped: bool, limiting: Limiting) -> S {
+    let (h_area, mu, lambda) = (p[0], p[1], p[2]);
+    let c: Mat2<S> = f.transpose().mul_mat(f);
     let ic = c.trace();
     let ln_j = c.det().ln() * 0.5;
     let mut psi = mu * (ic - 2.0) * 0.5 - mu * ln_j + lambda * ln_j.sq() * 0.5;
-    if full {
-        let (c_over_dt, limit, k) = (p[10], p[14], p[15]);
+    if damped || limiting != Limiting::Off {
         let e = c.sub_identity(1.0).scale(S::constant(0.5));
-        let de = e.sub(&Mat([[p[11], p[13]], [p[13], p[12]]]));
-        psi += c_over_dt * de.frobenius_norm_sq() * 0.5;
-        for s in e.symmetric_eigenvalues() {
-            let over = s - limit;
-            psi += S::select_gt(over, S::zero(), || k * over.powi(3) * (1.0 / 3.0), S::zero);
+        if damped {
+            psi += p[3]
+                * e.sub(&Mat([[p[4], p[6]], [p[6], p[5]]]))
+                    .frobenius_norm_sq()
+                * 0.5;
+        }
+        let (limit, k) = (p[7], p[8]);
+        let third = 1.0 / 3.0;
+        match limiting {
+            Limiting::Off => {}
+            Limiting::Largest => psi += k * (e.symmetric_eigenvalues()[0] - limit).powi(3) * third,
+            Limiting::Both => psi += k * both_over_cubed(&e, limit) * third,
+            Limiting::Branch => {
+                let [s_max, s_min] = e.symmetric_eigenvalues();
+                psi += S::select_gt(
+                    s_min - limit,
+                    S::zero(),
+                    || k * both_over_cubed(&e, limit) * third,
+                    || {
+                        S::select_gt(
+                            s_max - limit,
+                            S::zero(),
+                            || k * (s_max - limit).powi(3) * third,
+                            S::zero,
+                        )
+                    },
+                );
+            }
         }
     }
-    let centroid_work = (x[0] + x[1] + x[2]).dot(&Vec3([p[7], p[8], p[9]])) * (1.0 / 3.0);
-    h_area * psi - centroid_work
+    h_area * psi
 }
 
-/// Generated kernel of the elastic-only energy.
-pub const ELASTIC_KERNEL: KernelSpec = KernelSpec {
-    name: "triangle_strain_elastic",
-    n_inputs: 9,
-    n_params: ELASTIC_PARAMS,
-    energy: |x, p| triangle_energy(&points_from_flat(x), p, false),
-};
-/// Generated kernel with damping and strain limiting.
-pub const FULL_KERNEL: KernelSpec = KernelSpec {
-    name: "triangle_strain_full",
-    n_inputs: 9,
-    n_params: FULL_PARAMS,
-    energy: |x, p| triangle_energy(&points_from_flat(x), p, true),
-};
+/// Energy of one triangle (J) in terms of its node positions: `F = D_s D_m⁻¹`, [`triangle_psi`],
+/// and the work of the inflation force on the centroid.
+pub fn triangle_energy<S: Scalar>(x: &[Vec3<S>; 3], p: &[S]) -> S {
+    let ds = Mat32::from_columns3([x[1] - x[0], x[2] - x[0]]);
+    let dm_inv: Mat2<S> = Mat([[p[0], p[1]], [p[2], p[3]]]);
+    let psi = triangle_psi(
+        &ds.mul_mat(&dm_inv),
+        &p[4..4 + PSI_PARAMS],
+        true,
+        Limiting::Branch,
+    );
+    let force = Vec3([p[13], p[14], p[15]]);
+    psi - (x[0] + x[1] + x[2]).dot(&force) * (1.0 / 3.0)
+}
+
+fn mat32_from_flat<S: Scalar>(f: &[S]) -> Mat32<S> {
+    Mat([[f[0], f[1]], [f[2], f[3]], [f[4], f[5]]])
+}
+
+fn psi_kernel(name: &'static str, energy: fn(&[Sym], &[Sym]) -> Sym) -> KernelSpec {
+    KernelSpec {
+        name,
+        n_inputs: 6,
+        n_params: PSI_PARAMS,
+        energy,
+    }
+}
+
+/// Generated `Ψ(F)` kernels: elastic, damped, and damped with one or both strains limited.
+pub fn kernels() -> [KernelSpec; 4] {
+    [
+        psi_kernel("triangle_psi_elastic", |f, p| {
+            triangle_psi(&mat32_from_flat(f), p, false, Limiting::Off)
+        }),
+        psi_kernel("triangle_psi_damped", |f, p| {
+            triangle_psi(&mat32_from_flat(f), p, true, Limiting::Off)
+        }),
+        psi_kernel("triangle_psi_limited_largest", |f, p| {
+            triangle_psi(&mat32_from_flat(f), p, true, Limiting::Largest)
+        }),
+        psi_kernel("triangle_psi_limited_both", |f, p| {
+            triangle_psi(&mat32_from_flat(f), p, true, Limiting::Both)
+        }),
+    ]
+}
 
 /// `D_m` of a rest triangle in an orthonormal frame of its plane, and its area.
 pub fn triangle_rest_frame(x: [Vector3<f64>; 3]) -> (Matrix2<f64>, f64) {
@@ -274,12 +342,13 @@ impl TriangleStrain {
         Ok(())
     }
 
-    fn kernel_params(&self, e: usize, stencil: &Stencil<3>) -> ([f64; FULL_PARAMS], bool) {
+    /// Parameters of triangle `e` (layout of [`PARAMS`]) and whether it is damped.
+    fn kernel_params(&self, e: usize, stencil: &Stencil<3>) -> ([f64; PARAMS], bool) {
         let params = &self.groups.params[self.group[e] as usize];
         let rest = &self.rest[e];
         let s = params.scale;
         let (mu, lambda) = params.lame();
-        let mut p = [0.0; FULL_PARAMS];
+        let mut p = [0.0; PARAMS];
         p[0] = rest.dm_inv[0][0] / s;
         p[1] = rest.dm_inv[0][1] / s;
         p[2] = rest.dm_inv[1][0] / s;
@@ -288,28 +357,26 @@ impl TriangleStrain {
         p[5] = mu;
         p[6] = lambda;
         let x0 = stencil.x0;
-        if params.inflation_pa != 0.0 {
-            let f = (x0[1] - x0[0]).cross(&(x0[2] - x0[0])) * (0.5 * params.inflation_pa);
-            p[7] = f.x;
-            p[8] = f.y;
-            p[9] = f.z;
-        }
-        let full = params.needs_full_kernel();
-        if full {
+        let damped = params.damping > 0.0;
+        if damped {
             let dm_inv = Matrix2::new(p[0], p[1], p[2], p[3]);
-            let e1 = x0[1] - x0[0];
-            let e2 = x0[2] - x0[0];
-            let ds = nalgebra::Matrix3x2::from_columns(&[e1, e2]);
+            let ds = nalgebra::Matrix3x2::from_columns(&[x0[1] - x0[0], x0[2] - x0[0]]);
             let f0 = ds * dm_inv;
             let e0 = 0.5 * (f0.transpose() * f0 - Matrix2::identity());
-            p[10] = params.damping / stencil.dt;
-            p[11] = e0[(0, 0)];
-            p[12] = e0[(1, 1)];
-            p[13] = e0[(0, 1)];
-            p[14] = params.strain_limit;
-            p[15] = params.strain_limit_stiffness;
+            p[7] = params.damping / stencil.dt;
+            p[8] = e0[(0, 0)];
+            p[9] = e0[(1, 1)];
+            p[10] = e0[(0, 1)];
         }
-        (p, full)
+        p[11] = params.strain_limit;
+        p[12] = params.strain_limit_stiffness;
+        if params.inflation_pa != 0.0 {
+            let f = (x0[1] - x0[0]).cross(&(x0[2] - x0[0])) * (0.5 * params.inflation_pa);
+            p[13] = f.x;
+            p[14] = f.y;
+            p[15] = f.z;
+        }
+        (p, damped)
     }
 }
 
@@ -324,25 +391,64 @@ impl Potential<3> for TriangleStrain {
         self.triangles[e].map(Node::Point)
     }
     fn energy<S: Scalar>(&self, e: usize, x: &[Vec3<S>; 3], stencil: &Stencil<3>) -> S {
-        let (p, full) = self.kernel_params(e, stencil);
-        triangle_energy(x, &p.map(S::constant), full)
+        let (p, _) = self.kernel_params(e, stencil);
+        triangle_energy(x, &p.map(S::constant))
     }
-    fn derivatives(&self, e: usize, stencil: &Stencil<3>, out: &mut HyperDual<3>) -> bool {
-        let (p, full) = self.kernel_params(e, stencil);
-        let mut x = [0.0; 9];
-        flat_from_points(&stencil.x, &mut x);
-        let grad = out.grad.as_flattened_mut();
-        let hess = out
-            .hess
-            .as_flattened_mut()
-            .as_flattened_mut()
-            .as_flattened_mut();
-        out.value = if full {
-            generated::triangle_strain_full(&x, &p, grad, hess)
+    fn derivatives(
+        &self,
+        e: usize,
+        stencil: &Stencil<3>,
+        project: bool,
+        out: &mut HyperDual<3>,
+    ) -> FastDerivatives {
+        let (p, damped) = self.kernel_params(e, stencil);
+        let w = gradient_weights::<3, 2>(&[[p[0], p[1]], [p[2], p[3]]]);
+        let mut f = [0.0; 6];
+        deformation_gradient(&w, &stencil.x, &mut f);
+        let psi = &p[4..4 + PSI_PARAMS];
+        let limit = psi[7];
+        let limiting = if limit.is_finite() {
+            let fm: Mat32<f64> = mat32_from_flat(&f);
+            let c: Mat2<f64> = fm.transpose().mul_mat(&fm);
+            let [s_max, s_min] = c.sub_identity(1.0).scale(0.5).symmetric_eigenvalues();
+            if s_min > limit {
+                Limiting::Both
+            } else if s_max > limit {
+                Limiting::Largest
+            } else {
+                Limiting::Off
+            }
         } else {
-            generated::triangle_strain_elastic(&x, &p[..ELASTIC_PARAMS], grad, hess)
+            Limiting::Off
         };
-        true
+        let mut g = [0.0; 6];
+        let mut h = [0.0; 36];
+        let value = match (limiting, damped) {
+            (Limiting::Both, _) => generated::triangle_psi_limited_both(&f, psi, &mut g, &mut h),
+            (Limiting::Largest, _) => {
+                generated::triangle_psi_limited_largest(&f, psi, &mut g, &mut h)
+            }
+            (_, true) => generated::triangle_psi_damped(&f, psi, &mut g, &mut h),
+            (_, false) => generated::triangle_psi_elastic(&f, psi, &mut g, &mut h),
+        };
+        map_to_nodes(&w, value, &g, &mut h, project, out);
+        // Inflation: linear in x, gradient only.
+        let force = [p[13], p[14], p[15]];
+        let centroid_work: f64 = (0..3)
+            .map(|i| (stencil.x[0][i] + stencil.x[1][i] + stencil.x[2][i]) * force[i])
+            .sum::<f64>()
+            / 3.0;
+        out.value -= centroid_work;
+        for a in 0..3 {
+            for i in 0..3 {
+                out.grad[a][i] -= force[i] / 3.0;
+            }
+        }
+        if project {
+            FastDerivatives::Projected
+        } else {
+            FastDerivatives::Exact
+        }
     }
     fn topology_version(&self) -> u64 {
         self.version

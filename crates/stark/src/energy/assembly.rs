@@ -128,8 +128,9 @@ impl Assembler {
         self.rebuilds += 1;
     }
 
-    /// Evaluate all terms at `state`: returns the total energy, writes the gradient (length
-    /// `3·n_blocks`) and assembles the Hessian into [`Assembler::matrix`].
+    /// Evaluate all terms at `state`: returns the total energy and the sum of absolute element
+    /// energies (the scale of its rounding error), writes the gradient (length `3·n_blocks`) and
+    /// assembles the Hessian into [`Assembler::matrix`].
     pub fn assemble(
         &mut self,
         terms: &[&dyn EnergyTerm],
@@ -137,16 +138,20 @@ impl Assembler {
         n_blocks: usize,
         mode: EvalMode,
         gradient: &mut [f64],
-    ) -> f64 {
+    ) -> (f64, f64) {
         self.ensure_layout(terms, state, n_blocks);
         let mut energy = 0.0;
+        let mut scale = 0.0;
         for (k, t) in terms.iter().enumerate() {
             let len = t.num_elements() * element_stride(t.stencil_width());
             let base = self.term_base[k];
             let out = &mut self.buffer[base..base + len];
             t.evaluate(state, mode, out);
             let stride = element_stride(t.stencil_width());
-            energy += out.iter().step_by(stride).sum::<f64>();
+            for e in out.iter().step_by(stride) {
+                energy += e;
+                scale += e.abs();
+            }
         }
         let buffer = &self.buffer;
         let (gp, gs) = (&self.grad_ptr, &self.grad_src);
@@ -173,6 +178,6 @@ impl Assembler {
                 }
                 *v = acc;
             });
-        energy
+        (energy, scale)
     }
 }

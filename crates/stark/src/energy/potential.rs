@@ -68,6 +68,17 @@ impl<'a, const N: usize> Stencil<'a, N> {
     }
 }
 
+/// What a fast derivative path produced.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FastDerivatives {
+    /// No fast path: use hyper-duals.
+    Unavailable,
+    /// The exact Hessian.
+    Exact,
+    /// A Hessian already projected to positive semi-definite.
+    Projected,
+}
+
 /// An energy defined per element on `N` nodes, written in world positions.
 ///
 /// Implement [`Potential::energy`] once, generically; register the potential with
@@ -83,14 +94,27 @@ pub trait Potential<const N: usize>: Send + Sync {
     fn nodes(&self, e: usize) -> [Node; N];
     /// Energy of element `e` at positions `x` (J).
     fn energy<S: Scalar>(&self, e: usize, x: &[Vec3<S>; N], stencil: &Stencil<N>) -> S;
-    /// Value, gradient and full Hessian with respect to `x` from a fast path, written into `out`
-    /// (hyper-dual layout, both triangles). Return `false` to use hyper-duals.
-    fn derivatives(&self, _e: usize, _stencil: &Stencil<N>, _out: &mut HyperDual<N>) -> bool {
-        false
+    /// Value, gradient and full Hessian with respect to `x` from a fast path (generated code),
+    /// written into `out` (hyper-dual layout, both triangles). With `project`, the energy may
+    /// project the Hessian itself (e.g. in deformation-gradient space, which is cheaper) and say
+    /// so. The default uses hyper-duals.
+    fn derivatives(
+        &self,
+        _e: usize,
+        _stencil: &Stencil<N>,
+        _project: bool,
+        _out: &mut HyperDual<N>,
+    ) -> FastDerivatives {
+        FastDerivatives::Unavailable
     }
     /// See [`EnergyTerm::topology_version`].
     fn topology_version(&self) -> u64 {
         0
+    }
+    /// The element Hessians are positive semi-definite everywhere (a convex energy, e.g. a
+    /// quadratic spring): projection is skipped.
+    fn is_convex(&self) -> bool {
+        false
     }
     /// See [`EnergyTerm::before_step`].
     fn before_step(&mut self, _state: &EvalState) {}
@@ -115,17 +139,19 @@ pub fn dual_derivatives<P: Potential<N>, const N: usize>(
     d
 }
 
-/// Element derivatives by the fastest available path.
+/// Element derivatives by the fastest available path; the flag tells whether the Hessian is
+/// already projected.
 pub fn element_derivatives<P: Potential<N>, const N: usize>(
     p: &P,
     e: usize,
     stencil: &Stencil<N>,
-) -> HyperDual<N> {
+    project: bool,
+) -> (HyperDual<N>, bool) {
     let mut d = HyperDual::<N>::constant(0.0);
-    if p.derivatives(e, stencil, &mut d) {
-        d
-    } else {
-        dual_derivatives(p, e, stencil)
+    match p.derivatives(e, stencil, project, &mut d) {
+        FastDerivatives::Exact => (d, false),
+        FastDerivatives::Projected => (d, true),
+        FastDerivatives::Unavailable => (dual_derivatives(p, e, stencil), false),
     }
 }
 
@@ -213,9 +239,11 @@ impl<P: Potential<N>, const N: usize> EnergyTerm for PotentialTerm<P, N> {
         let stride = element_stride(N);
         let dt = state.dt;
         let n = 3 * N;
+        let convex = self.potential.is_convex();
         out.par_chunks_mut(stride).enumerate().for_each(|(e, o)| {
             let stencil = Stencil::new(self.potential.nodes(e), state);
-            let mut d = element_derivatives(&self.potential, e, &stencil);
+            let project = mode == EvalMode::ProjectedHessian && !convex;
+            let (mut d, projected) = element_derivatives(&self.potential, e, &stencil, project);
             // Deformable map: ∂x/∂v = dt·I, so ∇ᵥ = dt ∇ₓ and Hᵥ = dt² Hₓ (projection commutes
             // with the positive scaling).
             let h = d
@@ -223,7 +251,7 @@ impl<P: Potential<N>, const N: usize> EnergyTerm for PotentialTerm<P, N> {
                 .as_flattened_mut()
                 .as_flattened_mut()
                 .as_flattened_mut();
-            if mode == EvalMode::ProjectedHessian {
+            if project && !projected {
                 project_psd(h, n);
             }
             o[0] = d.value;

@@ -16,20 +16,20 @@ pub use kernels::*;
 /// Every generated kernel, in file order.
 pub fn specs() -> Vec<KernelSpec> {
     use crate::deformables::*;
-    vec![
+    let mut specs = vec![
         inertia::KERNEL,
         prescribed_positions::KERNEL,
         segment_strain::KERNEL,
-        triangle_strain::ELASTIC_KERNEL,
-        triangle_strain::FULL_KERNEL,
-        flat_bending::KERNEL,
-        dihedral_bending::KERNEL,
-        tet_strain::ELASTIC_KERNEL,
-        tet_strain::FULL_KERNEL,
+    ];
+    specs.extend(triangle_strain::kernels());
+    specs.extend([flat_bending::KERNEL, dihedral_bending::KERNEL]);
+    specs.extend(tet_strain::kernels());
+    specs.extend([
         attachments::POINT_POINT_KERNEL,
         attachments::POINT_EDGE_KERNEL,
         attachments::POINT_TRIANGLE_KERNEL,
-    ]
+    ]);
+    specs
 }
 
 /// The full source of `kernels.rs`.

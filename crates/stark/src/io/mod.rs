@@ -1,6 +1,7 @@
 //! File input and output: legacy VTK frames and mesh loaders (OBJ, STL, VTK, Gmsh `.msh`).
 
 pub mod mesh_files;
+pub mod output;
 pub mod vtk;
 
 pub use mesh_files::{

@@ -2,3 +2,8 @@
 //! adaptive time stepping.
 
 pub mod linear;
+pub mod newton;
+pub mod settings;
+
+pub use newton::{ConvergedBy, NewtonFailure, NewtonReport, PhaseTimes};
+pub use settings::{LinearSolver, NewtonSettings, OutputSettings, Projection, Settings};

@@ -1,0 +1,50 @@
+//! Runs a built-in scene and prints per-step statistics and the final-state figures.
+use stark::scenes::find_scene;
+use stark::Settings;
+
+fn main() {
+    let name = std::env::args()
+        .nth(1)
+        .unwrap_or_else(|| "hanging_cloth".into());
+    let threads: usize = std::env::args()
+        .nth(2)
+        .map(|s| s.parse().unwrap())
+        .unwrap_or(1);
+    let scene = find_scene(&name).unwrap();
+    let mut settings = Settings::default();
+    settings.threads = threads;
+    settings.output.frames = false;
+    settings.output.directory = "/tmp/stark_out".into();
+    let mut sim = (scene.build)(settings).unwrap();
+    let mut iters = Vec::new();
+    let t = std::time::Instant::now();
+    while sim.time() < scene.duration_s - 1e-3 * sim.dt() {
+        let r = sim.step().unwrap();
+        iters.push(r.newton_iterations);
+    }
+    let s = sim.summary();
+    println!(
+        "{} steps, {:.3} s wall, newton {} ({:.2}/step), cg {}, max residual {:.3e} N",
+        s.steps,
+        t.elapsed().as_secs_f64(),
+        s.newton_iterations,
+        s.newton_iterations_per_step,
+        s.cg_iterations,
+        s.max_residual_n
+    );
+    println!("times: {:?}", s.times);
+    println!("iterations: {:?}", &iters[..iters.len().min(40)]);
+    let x = &sim.nodes.x;
+    let n = x.len() as f64;
+    let c = x.iter().fold(nalgebra::Vector3::zeros(), |a, p| a + p) / n;
+    let minz = x.iter().map(|p| p.z).fold(f64::INFINITY, f64::min);
+    let maxz = x.iter().map(|p| p.z).fold(f64::NEG_INFINITY, f64::max);
+    let (minx, maxx) = (
+        x.iter().map(|p| p.x).fold(f64::INFINITY, f64::min),
+        x.iter().map(|p| p.x).fold(f64::NEG_INFINITY, f64::max),
+    );
+    println!(
+        "centroid ({:.4}, {:.4}, {:.4}), z [{:.4}, {:.4}], x [{:.4}, {:.4}]",
+        c.x, c.y, c.z, minz, maxz, minx, maxx
+    );
+}

@@ -1,0 +1,511 @@
+//! The simulation: state, models, the step loop with adaptive time stepping, events and output.
+
+use crate::deformables::{Deformables, NodeSetHandle};
+use crate::energy::{EnergyTerm, StepCheck};
+use crate::error::{Result, StarkError};
+use crate::io::output::Output;
+use crate::solver::newton::{self, ConvergedBy, NewtonWorkspace, PhaseTimes, StepProblem};
+use crate::solver::Settings;
+use crate::state::{positions_from_velocities, EvalState, NodeArrays};
+use nalgebra::Vector3;
+use serde::Serialize;
+use std::time::Instant;
+
+/// A scripted action run before every step whose end time lies in `[start_s, end_s)`.
+type EventAction = Box<dyn FnMut(&mut Simulation, f64) -> Result<()> + Send>;
+
+struct TimeEvent {
+    start_s: f64,
+    end_s: f64,
+    action: EventAction,
+}
+
+/// What one accepted time step did (one line of the step log).
+#[derive(Clone, Debug, Serialize)]
+pub struct StepReport {
+    /// Index of the step (from 0).
+    pub step: u64,
+    /// Time at the end of the step, s.
+    pub time_s: f64,
+    /// Step size, s.
+    pub dt_s: f64,
+    /// Newton iterations of the accepted attempt.
+    pub newton_iterations: usize,
+    /// Force residual reached, N.
+    pub residual_n: f64,
+    /// Criterion that ended the Newton solve.
+    pub converged_by: ConvergedBy,
+    /// Line-search energy evaluations.
+    pub line_search_evaluations: usize,
+    /// CG iterations.
+    pub cg_iterations: usize,
+    /// Smallest valid step fraction met in the line searches (below 1: CCD limited a step).
+    pub min_step_fraction: f64,
+    /// Attempts repeated because a model hardened a stiffness.
+    pub hardening_retries: usize,
+    /// Attempts that failed and halved dt.
+    pub failed_attempts: usize,
+    /// Newton iterations over all attempts.
+    pub total_newton_iterations: usize,
+    /// Wall time of the step, s.
+    pub wall_time_s: f64,
+    /// Wall time per phase over all attempts.
+    pub times: PhaseTimes,
+}
+
+/// Totals of a run.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct RunSummary {
+    /// Simulation name.
+    pub scene: String,
+    /// Simulated time, s.
+    pub simulated_time_s: f64,
+    /// Accepted steps.
+    pub steps: u64,
+    /// Failed attempts (each halved dt).
+    pub failed_steps: u64,
+    /// Attempts repeated after a stiffness hardening.
+    pub hardening_retries: u64,
+    /// Newton iterations over all attempts.
+    pub newton_iterations: u64,
+    /// Newton iterations per accepted step.
+    pub newton_iterations_per_step: f64,
+    /// CG iterations.
+    pub cg_iterations: u64,
+    /// Largest residual at which a step was accepted, N.
+    pub max_residual_n: f64,
+    /// Steps that ended by the step-size criterion rather than the residual.
+    pub steps_converged_by_step_size: u64,
+    /// Wall time, s.
+    pub wall_time_s: f64,
+    /// Wall time per simulated second.
+    pub wall_time_per_simulated_s: f64,
+    /// Wall time per phase.
+    pub times: PhaseTimes,
+    /// Frames written.
+    pub frames: usize,
+    /// Number of deformable nodes.
+    pub nodes: usize,
+}
+
+/// A simulation: nodes, energies, settings and the time loop.
+pub struct Simulation {
+    /// Settings (may be changed between steps).
+    pub settings: Settings,
+    /// All deformable nodes.
+    pub nodes: NodeArrays,
+    /// Deformable energy models.
+    pub deformables: Deformables,
+    /// Frames and logs.
+    pub output: Output,
+    custom: Vec<Box<dyn EnergyTerm>>,
+    time: f64,
+    dt: f64,
+    events: Vec<TimeEvent>,
+    newton: NewtonWorkspace,
+    velocities: Vec<Vector3<f64>>,
+    scratch_x: Vec<Vector3<f64>>,
+    pool: Option<rayon::ThreadPool>,
+    summary: RunSummary,
+    started: bool,
+}
+
+impl Simulation {
+    /// A new, empty simulation.
+    pub fn new(settings: Settings) -> Result<Self> {
+        settings.validate()?;
+        let pool = if settings.threads > 0 {
+            Some(
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(settings.threads)
+                    .build()
+                    .map_err(|e| {
+                        StarkError::InvalidInput(format!(
+                            "cannot start {} threads: {e}",
+                            settings.threads
+                        ))
+                    })?,
+            )
+        } else {
+            None
+        };
+        let dt = settings.time_step_s;
+        Ok(Simulation {
+            summary: RunSummary {
+                scene: settings.name.clone(),
+                ..Default::default()
+            },
+            settings,
+            nodes: NodeArrays::default(),
+            deformables: Deformables::default(),
+            output: Output::default(),
+            custom: Vec::new(),
+            time: 0.0,
+            dt,
+            events: Vec::new(),
+            newton: NewtonWorkspace::default(),
+            velocities: Vec::new(),
+            scratch_x: Vec::new(),
+            pool,
+            started: false,
+        })
+    }
+
+    /// Simulated time, s.
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    /// Current time step, s (below `settings.time_step_s` after failures).
+    pub fn dt(&self) -> f64 {
+        self.dt
+    }
+
+    /// Totals so far.
+    pub fn summary(&self) -> &RunSummary {
+        &self.summary
+    }
+
+    /// Gravity, m/s².
+    pub fn gravity(&self) -> Vector3<f64> {
+        Vector3::from(self.settings.gravity_m_s2)
+    }
+
+    /// Change gravity (takes effect at the next step).
+    pub fn set_gravity(&mut self, g: Vector3<f64>) {
+        self.settings.gravity_m_s2 = g.into();
+    }
+
+    /// Add deformable nodes at `positions` (their rest positions too) as a labelled object.
+    pub fn add_nodes(&mut self, label: &str, positions: &[Vector3<f64>]) -> Result<NodeSetHandle> {
+        if label.is_empty() || self.deformables.set_by_label(label).is_some() {
+            return Err(StarkError::InvalidInput(format!(
+                "object label '{label}' is empty or already used"
+            )));
+        }
+        if let Some(i) = positions
+            .iter()
+            .position(|p| !p.iter().all(|c| c.is_finite()))
+        {
+            return Err(StarkError::InvalidInput(format!(
+                "node {i} of '{label}' has a non-finite position"
+            )));
+        }
+        if positions.is_empty() {
+            return Err(StarkError::InvalidInput(format!(
+                "object '{label}' has no nodes"
+            )));
+        }
+        let first = self.nodes.push(positions);
+        let handle = NodeSetHandle {
+            index: self.deformables.sets.len() as u32,
+            first: first as u32,
+            len: positions.len() as u32,
+        };
+        self.deformables.sets.push((label.to_string(), handle));
+        Ok(handle)
+    }
+
+    /// Positions of an object's nodes, m.
+    pub fn positions(&self, set: NodeSetHandle) -> &[Vector3<f64>] {
+        &self.nodes.x[set.range()]
+    }
+
+    /// Velocities of an object's nodes, m/s.
+    pub fn velocities(&self, set: NodeSetHandle) -> &[Vector3<f64>] {
+        &self.nodes.v[set.range()]
+    }
+
+    /// Set the velocity of every node of an object, m/s.
+    pub fn set_velocity(&mut self, set: NodeSetHandle, v: Vector3<f64>) {
+        for i in set.range() {
+            self.nodes.v[i] = v;
+        }
+    }
+
+    /// Add a user energy term (e.g. a [`PotentialTerm`](crate::energy::PotentialTerm)).
+    pub fn add_term(&mut self, term: Box<dyn EnergyTerm>) {
+        self.custom.push(term);
+    }
+
+    /// Run `action(sim, t)` before every step whose end time `t` lies in `[start_s, end_s)`.
+    /// Use it to move prescribed targets, ramp parameters or change gravity; `t` is the time the
+    /// step is solved for, so targets set for `t` are met at the end of that step.
+    pub fn add_time_event(
+        &mut self,
+        start_s: f64,
+        end_s: f64,
+        action: impl FnMut(&mut Simulation, f64) -> Result<()> + Send + 'static,
+    ) {
+        self.events.push(TimeEvent {
+            start_s,
+            end_s,
+            action: Box::new(action),
+        });
+    }
+
+    fn terms_mut(&mut self) -> Vec<&mut dyn EnergyTerm> {
+        let mut terms = self.deformables.terms_mut();
+        terms.extend(
+            self.custom
+                .iter_mut()
+                .map(|t| &mut **t as &mut dyn EnergyTerm),
+        );
+        terms
+    }
+
+    fn run_events(&mut self, t_end: f64) -> Result<()> {
+        let mut events = std::mem::take(&mut self.events);
+        let mut result = Ok(());
+        for e in events.iter_mut() {
+            if t_end >= e.start_s && t_end < e.end_s {
+                result = (e.action)(self, t_end);
+                if result.is_err() {
+                    break;
+                }
+            }
+        }
+        // Events added by events are kept.
+        events.append(&mut self.events);
+        self.events = events;
+        result
+    }
+
+    fn start(&mut self) -> Result<()> {
+        if self.started {
+            return Ok(());
+        }
+        self.started = true;
+        let dir = self.settings.output.directory.clone();
+        if self.settings.output.step_log {
+            self.output.open_log(&dir, &self.settings.name)?;
+        }
+        if self.settings.output.frames
+            && self.settings.output.fps > 0.0
+            && !self.output.meshes.is_empty()
+        {
+            self.output
+                .write_frame(&dir, &self.settings.name, &self.nodes)?;
+            self.output.next_frame_time = 1.0 / self.settings.output.fps;
+        }
+        Ok(())
+    }
+
+    /// Advance by one accepted time step (retrying with a smaller dt or hardened stiffness as
+    /// needed).
+    pub fn step(&mut self) -> Result<StepReport> {
+        self.start()?;
+        let wall = Instant::now();
+        let mut times = PhaseTimes::default();
+        let mut hardening_retries = 0;
+        let mut failed_attempts = 0;
+        let mut total_newton = 0;
+        loop {
+            let dt = self.dt;
+            let t_end = self.time + dt;
+            self.run_events(t_end)?;
+            let gravity = self.gravity();
+            let newton_settings = self.settings.newton.clone();
+            let mut velocities = std::mem::take(&mut self.velocities);
+            let mut newton_ws = std::mem::take(&mut self.newton);
+            let pool = self.pool.take();
+            let nodes = std::mem::take(&mut self.nodes);
+            let result = {
+                let problem = StepProblem {
+                    nodes: &nodes,
+                    dt,
+                    time: t_end,
+                    gravity,
+                };
+                let mut terms = self.terms_mut();
+                // Lagged quantities are taken at the start of the step (v = 0, x = x0).
+                {
+                    let zeros = vec![Vector3::zeros(); nodes.len()];
+                    let state = EvalState {
+                        dt,
+                        time: t_end,
+                        gravity,
+                        nodes: &nodes,
+                        v: &zeros,
+                        x: &nodes.x,
+                    };
+                    for t in terms.iter_mut() {
+                        t.before_step(&state);
+                    }
+                }
+                let mut solve = || {
+                    newton::solve(
+                        &mut newton_ws,
+                        &mut terms,
+                        &problem,
+                        &mut velocities,
+                        &newton_settings,
+                    )
+                };
+                match &pool {
+                    Some(p) => p.install(solve),
+                    None => solve(),
+                }
+            };
+            self.nodes = nodes;
+            self.pool = pool;
+            self.newton = newton_ws;
+            match result {
+                Ok(report) => {
+                    times.add(&report.times);
+                    total_newton += report.iterations;
+                    positions_from_velocities(&self.nodes, &velocities, dt, &mut self.scratch_x);
+                    let mut retry = Vec::new();
+                    {
+                        let nodes = std::mem::take(&mut self.nodes);
+                        let x = std::mem::take(&mut self.scratch_x);
+                        {
+                            let state = EvalState {
+                                dt,
+                                time: t_end,
+                                gravity,
+                                nodes: &nodes,
+                                v: &velocities,
+                                x: &x,
+                            };
+                            for t in self.terms_mut() {
+                                if let StepCheck::Retry(msg) = t.check_converged_step(&state) {
+                                    retry.push(msg);
+                                }
+                            }
+                        }
+                        self.nodes = nodes;
+                        self.scratch_x = x;
+                    }
+                    if !retry.is_empty() {
+                        hardening_retries += 1;
+                        self.summary.hardening_retries += 1;
+                        self.velocities = velocities;
+                        if hardening_retries > self.settings.max_hardening_retries {
+                            return Err(StarkError::StepFailed {
+                                time_s: self.time,
+                                dt_s: dt,
+                                dt_min_s: self.settings.min_time_step_s,
+                                reason: format!("still out of tolerance after {hardening_retries} hardenings: {}", retry.join("; ")),
+                            });
+                        }
+                        continue;
+                    }
+                    // Commit.
+                    std::mem::swap(&mut self.nodes.x, &mut self.scratch_x);
+                    self.nodes.v.copy_from_slice(&velocities);
+                    self.velocities = velocities;
+                    self.time = t_end;
+                    {
+                        let nodes = std::mem::take(&mut self.nodes);
+                        {
+                            let state = EvalState {
+                                dt,
+                                time: t_end,
+                                gravity,
+                                nodes: &nodes,
+                                v: &nodes.v,
+                                x: &nodes.x,
+                            };
+                            for t in self.terms_mut() {
+                                t.after_step(&state);
+                            }
+                        }
+                        self.nodes = nodes;
+                    }
+                    if self.settings.adaptive_time_step {
+                        self.dt =
+                            (dt * self.settings.time_step_growth).min(self.settings.time_step_s);
+                    }
+                    let step_report = StepReport {
+                        step: self.summary.steps,
+                        time_s: self.time,
+                        dt_s: dt,
+                        newton_iterations: report.iterations,
+                        residual_n: report.residual_n,
+                        converged_by: report.converged_by,
+                        line_search_evaluations: report.line_search_evaluations,
+                        cg_iterations: report.cg_iterations,
+                        min_step_fraction: report.min_step_fraction,
+                        hardening_retries,
+                        failed_attempts,
+                        total_newton_iterations: total_newton,
+                        wall_time_s: wall.elapsed().as_secs_f64(),
+                        times,
+                    };
+                    self.record(&step_report)?;
+                    return Ok(step_report);
+                }
+                Err(failure) => {
+                    self.velocities = velocities;
+                    failed_attempts += 1;
+                    self.summary.failed_steps += 1;
+                    let half = dt * 0.5;
+                    if !self.settings.adaptive_time_step || half < self.settings.min_time_step_s {
+                        return Err(StarkError::StepFailed {
+                            time_s: self.time,
+                            dt_s: dt,
+                            dt_min_s: self.settings.min_time_step_s,
+                            reason: failure.to_string(),
+                        });
+                    }
+                    self.dt = half;
+                }
+            }
+        }
+    }
+
+    fn record(&mut self, r: &StepReport) -> Result<()> {
+        let s = &mut self.summary;
+        s.steps += 1;
+        s.simulated_time_s = self.time;
+        s.newton_iterations += r.total_newton_iterations as u64;
+        s.cg_iterations += r.cg_iterations as u64;
+        s.max_residual_n = s.max_residual_n.max(r.residual_n);
+        if r.converged_by == ConvergedBy::Step {
+            s.steps_converged_by_step_size += 1;
+        }
+        s.wall_time_s += r.wall_time_s;
+        s.times.add(&r.times);
+        s.newton_iterations_per_step = s.newton_iterations as f64 / s.steps as f64;
+        s.wall_time_per_simulated_s = if self.time > 0.0 {
+            s.wall_time_s / self.time
+        } else {
+            0.0
+        };
+        s.nodes = self.nodes.len();
+        self.output.log(r)?;
+        let fps = self.settings.output.fps;
+        if self.settings.output.frames && fps > 0.0 && !self.output.meshes.is_empty() {
+            let dir = self.settings.output.directory.clone();
+            while self.time >= self.output.next_frame_time - 1e-9 * self.dt {
+                self.output
+                    .write_frame(&dir, &self.settings.name, &self.nodes)?;
+                self.output.next_frame_time += 1.0 / fps;
+            }
+        }
+        self.summary.frames = self.output.frames_written;
+        Ok(())
+    }
+
+    /// Simulate `duration_s` more seconds.
+    pub fn run(&mut self, duration_s: f64) -> Result<RunSummary> {
+        self.run_with(duration_s, |_| Ok(()))
+    }
+
+    /// Simulate `duration_s` more seconds, calling `callback` before every step.
+    pub fn run_with(
+        &mut self,
+        duration_s: f64,
+        mut callback: impl FnMut(&mut Simulation) -> Result<()>,
+    ) -> Result<RunSummary> {
+        let end = self.time + duration_s;
+        // Stop when less than a thousandth of a step remains (rounding of repeated additions).
+        while self.time < end - 1e-3 * self.dt.min(self.settings.time_step_s) {
+            callback(self)?;
+            self.step()?;
+        }
+        self.output.flush()?;
+        Ok(self.summary.clone())
+    }
+}

@@ -1,0 +1,351 @@
+//! Newton's method on the end-of-step velocities (DESIGN §2).
+//!
+//! Each iteration: let terms update their active sets, assemble `E`, `∇E` and the projected
+//! Hessian `H`, stop if the force residual `‖∇E‖∞/dt` is below tolerance, solve `H Δv = −∇E`,
+//! then line search: the largest step the terms allow (CCD), halved until the Armijo condition
+//! holds. The initial guess is the previous velocity, shortened to the largest valid fraction.
+
+use super::linear::block_sparse::{dot, norm_inf};
+use super::linear::cholesky::CholeskySolver;
+use super::linear::pcg;
+use super::settings::{LinearSolver, NewtonSettings, Projection};
+use crate::energy::assembly::Assembler;
+use crate::energy::{EnergyTerm, EvalMode};
+use crate::state::{positions_from_velocities, EvalState, NodeArrays};
+use nalgebra::Vector3;
+use serde::Serialize;
+use std::time::Instant;
+
+/// Which criterion ended a Newton solve.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ConvergedBy {
+    /// The force residual fell below `residual_tolerance_n`.
+    Residual,
+    /// The Newton step fell below `step_tolerance_m_s`.
+    Step,
+}
+
+/// Wall time spent per phase, s.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct PhaseTimes {
+    /// Active-set updates (contact detection) before evaluations.
+    pub prepare_s: f64,
+    /// Element evaluation, projection and assembly.
+    pub evaluation_s: f64,
+    /// Linear solves.
+    pub linear_solve_s: f64,
+    /// Line search (CCD bounds and energy evaluations).
+    pub line_search_s: f64,
+}
+
+impl PhaseTimes {
+    /// Add another record.
+    pub fn add(&mut self, o: &PhaseTimes) {
+        self.prepare_s += o.prepare_s;
+        self.evaluation_s += o.evaluation_s;
+        self.linear_solve_s += o.linear_solve_s;
+        self.line_search_s += o.line_search_s;
+    }
+}
+
+/// What one Newton solve did.
+#[derive(Clone, Debug, Serialize)]
+pub struct NewtonReport {
+    /// Newton iterations (linear solves).
+    pub iterations: usize,
+    /// Force residual `‖∇E‖∞/dt` at the last evaluation, N.
+    pub residual_n: f64,
+    /// The criterion that ended the solve.
+    pub converged_by: ConvergedBy,
+    /// Energy evaluations in line searches.
+    pub line_search_evaluations: usize,
+    /// Total CG iterations.
+    pub cg_iterations: usize,
+    /// Smallest step fraction allowed by the terms (CCD) over the solve.
+    pub min_step_fraction: f64,
+    /// The exact Hessian was not positive definite and projection was switched on.
+    pub projected: bool,
+    /// Time per phase.
+    pub times: PhaseTimes,
+}
+
+/// Why a Newton solve failed.
+#[derive(Clone, Debug, thiserror::Error)]
+pub enum NewtonFailure {
+    /// No convergence within the iteration limit.
+    #[error("no convergence in {iterations} Newton iterations (residual {residual_n:.3e} N)")]
+    MaxIterations {
+        /// Iterations performed.
+        iterations: usize,
+        /// Last residual, N.
+        residual_n: f64,
+    },
+    /// The energy or its gradient is not finite.
+    #[error("non-finite energy or gradient in '{0}'")]
+    NonFinite(String),
+    /// The line search found no acceptable step.
+    #[error("line search failed after {evaluations} evaluations (residual {residual_n:.3e} N)")]
+    LineSearch {
+        /// Energy evaluations.
+        evaluations: usize,
+        /// Residual, N.
+        residual_n: f64,
+    },
+}
+
+/// Memory reused across Newton solves.
+#[derive(Default)]
+pub struct NewtonWorkspace {
+    /// Assembly layout and the global Hessian.
+    pub assembler: Assembler,
+    cholesky: CholeskySolver,
+    gradient: Vec<f64>,
+    rhs: Vec<f64>,
+    step: Vec<f64>,
+    x: Vec<Vector3<f64>>,
+    trial_v: Vec<Vector3<f64>>,
+    trial_x: Vec<Vector3<f64>>,
+}
+
+/// The fixed data of one step.
+pub struct StepProblem<'a> {
+    /// Start-of-step nodes.
+    pub nodes: &'a NodeArrays,
+    /// Time step, s.
+    pub dt: f64,
+    /// End-of-step time, s.
+    pub time: f64,
+    /// Gravity, m/s².
+    pub gravity: Vector3<f64>,
+}
+
+impl StepProblem<'_> {
+    fn state<'s>(&'s self, v: &'s [Vector3<f64>], x: &'s [Vector3<f64>]) -> EvalState<'s> {
+        EvalState {
+            dt: self.dt,
+            time: self.time,
+            gravity: self.gravity,
+            nodes: self.nodes,
+            v,
+            x,
+        }
+    }
+}
+
+fn total_energy(terms: &[&mut dyn EnergyTerm], state: &EvalState) -> f64 {
+    terms.iter().map(|t| t.energy(state)).sum()
+}
+
+fn max_step(terms: &[&mut dyn EnergyTerm], from: &EvalState, to: &EvalState) -> f64 {
+    terms
+        .iter()
+        .map(|t| t.max_step_fraction(from, to))
+        .fold(1.0, f64::min)
+}
+
+fn axpy_velocities(base: &[Vector3<f64>], step: &[f64], alpha: f64, out: &mut Vec<Vector3<f64>>) {
+    out.clear();
+    out.extend(
+        base.iter()
+            .enumerate()
+            .map(|(i, b)| b + Vector3::new(step[3 * i], step[3 * i + 1], step[3 * i + 2]) * alpha),
+    );
+}
+
+/// Solve one step: on success `v` holds the end-of-step velocities.
+pub fn solve(
+    ws: &mut NewtonWorkspace,
+    terms: &mut [&mut dyn EnergyTerm],
+    problem: &StepProblem,
+    v: &mut Vec<Vector3<f64>>,
+    settings: &NewtonSettings,
+) -> Result<NewtonReport, NewtonFailure> {
+    let n = problem.nodes.len();
+    let dt = problem.dt;
+    let mut project = settings.projection == Projection::Always;
+    ws.gradient.resize(3 * n, 0.0);
+    ws.rhs.resize(3 * n, 0.0);
+    ws.step.resize(3 * n, 0.0);
+    let mut report = NewtonReport {
+        iterations: 0,
+        residual_n: f64::INFINITY,
+        converged_by: ConvergedBy::Residual,
+        line_search_evaluations: 0,
+        cg_iterations: 0,
+        min_step_fraction: 1.0,
+        projected: settings.projection == Projection::Always,
+        times: PhaseTimes::default(),
+    };
+
+    // Initial guess: the previous velocity, as far along it as is valid from rest (v = 0 keeps
+    // every node at x0, which is always valid).
+    v.clear();
+    v.resize(n, Vector3::zeros());
+    positions_from_velocities(problem.nodes, v, dt, &mut ws.x);
+    ws.trial_v.clear();
+    ws.trial_v.extend_from_slice(&problem.nodes.v);
+    positions_from_velocities(problem.nodes, &ws.trial_v, dt, &mut ws.trial_x);
+    {
+        let t0 = Instant::now();
+        let from = problem.state(v, &ws.x);
+        let to = problem.state(&ws.trial_v, &ws.trial_x);
+        let alpha = max_step(terms, &from, &to);
+        for (vi, v0) in v.iter_mut().zip(&problem.nodes.v) {
+            *vi = v0 * alpha;
+        }
+        report.times.line_search_s += t0.elapsed().as_secs_f64();
+    }
+
+    let mut first_residual: Option<f64> = None;
+    for iteration in 0..settings.max_iterations {
+        positions_from_velocities(problem.nodes, v, dt, &mut ws.x);
+        let t0 = Instant::now();
+        {
+            let state = problem.state(v, &ws.x);
+            for t in terms.iter_mut() {
+                t.prepare_evaluation(&state);
+            }
+        }
+        report.times.prepare_s += t0.elapsed().as_secs_f64();
+        let mut descent;
+        let mut residual;
+        let mut energy;
+        let mut energy_scale;
+        let mut r0;
+        loop {
+            let t1 = Instant::now();
+            let state = problem.state(v, &ws.x);
+            let shared: Vec<&dyn EnergyTerm> =
+                terms.iter().map(|t| &**t as &dyn EnergyTerm).collect();
+            let mode = if project {
+                EvalMode::ProjectedHessian
+            } else {
+                EvalMode::ExactHessian
+            };
+            (energy, energy_scale) =
+                ws.assembler
+                    .assemble(&shared, &state, n, mode, &mut ws.gradient);
+            report.times.evaluation_s += t1.elapsed().as_secs_f64();
+            if !energy.is_finite() || ws.gradient.iter().any(|g| !g.is_finite()) {
+                let culprit = shared
+                    .iter()
+                    .find(|t| !t.energy(&state).is_finite())
+                    .map(|t| t.name().to_string());
+                return Err(NewtonFailure::NonFinite(
+                    culprit.unwrap_or_else(|| "gradient".into()),
+                ));
+            }
+            residual = norm_inf(&ws.gradient) / dt;
+            report.residual_n = residual;
+            report.iterations = iteration;
+            if residual < settings.residual_tolerance_n {
+                report.converged_by = ConvergedBy::Residual;
+                return Ok(report);
+            }
+            r0 = *first_residual.get_or_insert(residual);
+
+            // Newton direction.
+            let t2 = Instant::now();
+            for (r, g) in ws.rhs.iter_mut().zip(&ws.gradient) {
+                *r = -g;
+            }
+            let matrix = &ws.assembler.matrix;
+            let mut solved = false;
+            let mut indefinite = false;
+            if settings.linear_solver == LinearSolver::Cholesky {
+                solved = ws
+                    .cholesky
+                    .solve(matrix, ws.assembler.pattern_id, &ws.rhs, &mut ws.step)
+                    .is_ok();
+                indefinite = !solved;
+            }
+            if !solved && !(indefinite && !project) {
+                let g_norm = dot(&ws.gradient, &ws.gradient).sqrt();
+                let eta = settings.cg_relative_tolerance.min((residual / r0).sqrt());
+                let tol = (eta * g_norm).max(0.1 * settings.residual_tolerance_n * dt);
+                let info = pcg::solve(
+                    matrix,
+                    &ws.rhs,
+                    &mut ws.step,
+                    tol,
+                    settings.cg_max_iterations,
+                );
+                report.cg_iterations += info.iterations;
+                indefinite = info.indefinite;
+            }
+            descent = dot(&ws.gradient, &ws.step);
+            let usable = descent < 0.0 && ws.step.iter().all(|s| s.is_finite());
+            report.times.linear_solve_s += t2.elapsed().as_secs_f64();
+            if !project && (indefinite || !usable) {
+                // The exact Hessian is not positive definite here: project from now on.
+                project = true;
+                report.projected = true;
+                continue;
+            }
+            if !usable {
+                // Not a descent direction even projected (no mass, quasistatic): fall back to
+                // block-Jacobi preconditioned steepest descent.
+                let inv = pcg::block_jacobi(matrix);
+                for (b, m) in inv.iter().enumerate() {
+                    for i in 0..3 {
+                        ws.step[3 * b + i] = -(0..3)
+                            .map(|j| m[3 * i + j] * ws.gradient[3 * b + j])
+                            .sum::<f64>();
+                    }
+                }
+                descent = dot(&ws.gradient, &ws.step);
+            }
+            break;
+        }
+        let t3 = Instant::now();
+
+        // Line search.
+        axpy_velocities(v, &ws.step, 1.0, &mut ws.trial_v);
+        positions_from_velocities(problem.nodes, &ws.trial_v, dt, &mut ws.trial_x);
+        let mut alpha = {
+            let from = problem.state(v, &ws.x);
+            let to = problem.state(&ws.trial_v, &ws.trial_x);
+            max_step(terms, &from, &to)
+        };
+        report.min_step_fraction = report.min_step_fraction.min(alpha);
+        // Below this the energy difference is rounding noise.
+        let noise = 1e-13 * energy_scale;
+        let mut accepted = false;
+        for _ in 0..settings.max_line_search_iterations {
+            axpy_velocities(v, &ws.step, alpha, &mut ws.trial_v);
+            positions_from_velocities(problem.nodes, &ws.trial_v, dt, &mut ws.trial_x);
+            {
+                let trial = problem.state(&ws.trial_v, &ws.trial_x);
+                for t in terms.iter_mut() {
+                    t.prepare_evaluation(&trial);
+                }
+            }
+            let trial = problem.state(&ws.trial_v, &ws.trial_x);
+            let e = total_energy(terms, &trial);
+            report.line_search_evaluations += 1;
+            if e.is_finite() && e <= energy + settings.armijo * alpha * descent + noise {
+                accepted = true;
+                break;
+            }
+            alpha *= 0.5;
+        }
+        report.times.line_search_s += t3.elapsed().as_secs_f64();
+        if !accepted {
+            return Err(NewtonFailure::LineSearch {
+                evaluations: report.line_search_evaluations,
+                residual_n: residual,
+            });
+        }
+        std::mem::swap(v, &mut ws.trial_v);
+        report.iterations = iteration + 1;
+        if settings.step_tolerance_m_s > 0.0 && norm_inf(&ws.step) < settings.step_tolerance_m_s {
+            report.converged_by = ConvergedBy::Step;
+            return Ok(report);
+        }
+    }
+    Err(NewtonFailure::MaxIterations {
+        iterations: settings.max_iterations,
+        residual_n: report.residual_n,
+    })
+}

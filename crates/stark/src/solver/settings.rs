@@ -1,0 +1,216 @@
+//! Solver and simulation settings: plain data with documented defaults.
+
+use serde::{Deserialize, Serialize};
+use std::path::PathBuf;
+
+/// How the Newton system is solved.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LinearSolver {
+    /// Block-Jacobi preconditioned conjugate gradients (scales to large systems).
+    Pcg,
+    /// Sparse Cholesky with the symbolic analysis reused while the pattern is unchanged (exact;
+    /// pays below about 25k DOFs on 2 cores).
+    Cholesky,
+}
+
+/// When element Hessians are projected to positive semi-definite.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Projection {
+    /// Every element, every iteration (robust, costs an eigen-decomposition per indefinite
+    /// element).
+    Always,
+    /// Exact Hessians until CG meets negative curvature or the direction is not a descent
+    /// direction; then projected ones for the rest of the step (like the original's progressive
+    /// projection, which projects only where needed).
+    OnDemand,
+}
+
+/// Newton solver settings.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct NewtonSettings {
+    /// A step converges when the force residual `‖∇ᵥE‖∞ / dt` falls below this, N (or N·m for
+    /// rotational DOFs) (default: 1e-6, the paper's tolerance).
+    pub residual_tolerance_n: f64,
+    /// A step also converges when the Newton step `‖Δv‖∞` falls below this, m/s; 0 disables it
+    /// (default: 0). The original Stark uses 1e-3 and its scenes rely on it.
+    pub step_tolerance_m_s: f64,
+    /// Newton iterations before the step counts as failed and dt is halved (default: 100).
+    pub max_iterations: usize,
+    /// Linear solver (default: PCG).
+    pub linear_solver: LinearSolver,
+    /// Largest number of CG iterations per solve (default: 10000).
+    pub cg_max_iterations: usize,
+    /// Relative CG tolerance at the first Newton iteration; it tightens as the residual falls
+    /// (forcing sequence `min(this, √(r/r₀))`) (default: 1e-2).
+    pub cg_relative_tolerance: f64,
+    /// Armijo sufficient-decrease constant (default: 1e-4).
+    pub armijo: f64,
+    /// Largest number of step halvings in the line search (default: 30).
+    pub max_line_search_iterations: usize,
+    /// When element Hessians are projected (default: on demand). Terms whose Hessians are always
+    /// indefinite near their active set (contact barriers) project regardless.
+    pub projection: Projection,
+}
+
+impl Default for NewtonSettings {
+    fn default() -> Self {
+        NewtonSettings {
+            residual_tolerance_n: 1e-6,
+            step_tolerance_m_s: 0.0,
+            max_iterations: 100,
+            linear_solver: LinearSolver::Pcg,
+            cg_max_iterations: 10_000,
+            cg_relative_tolerance: 1e-2,
+            armijo: 1e-4,
+            max_line_search_iterations: 30,
+            projection: Projection::OnDemand,
+        }
+    }
+}
+
+/// Frame and log output.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct OutputSettings {
+    /// Directory for frames and logs (default: "output").
+    pub directory: PathBuf,
+    /// Frames per simulated second; 0 disables frames (default: 30).
+    pub fps: f64,
+    /// Write VTK frames (default: true).
+    pub frames: bool,
+    /// Write the per-step log `<name>.steps.jsonl` (default: true).
+    pub step_log: bool,
+}
+
+impl Default for OutputSettings {
+    fn default() -> Self {
+        OutputSettings {
+            directory: PathBuf::from("output"),
+            fps: 30.0,
+            frames: true,
+            step_log: true,
+        }
+    }
+}
+
+/// Everything that configures a simulation run.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Settings {
+    /// Name, used for output files (default: "simulation").
+    pub name: String,
+    /// Largest (and initial) time step, s (default: 1/30).
+    pub time_step_s: f64,
+    /// Halve dt on a failed step and grow it back after successes (default: true).
+    pub adaptive_time_step: bool,
+    /// Smallest dt before the simulation gives up, s (default: 1e-6).
+    pub min_time_step_s: f64,
+    /// Factor dt grows by after each successful step, up to `time_step_s` (default: 1.5).
+    pub time_step_growth: f64,
+    /// Gravity, m/s² (default: (0, 0, −9.81)).
+    pub gravity_m_s2: [f64; 3],
+    /// Worker threads; 0 uses all cores (default: 0).
+    pub threads: usize,
+    /// Newton solver.
+    pub newton: NewtonSettings,
+    /// Output.
+    pub output: OutputSettings,
+    /// Largest number of times one step is repeated after a model hardened a stiffness
+    /// (default: 40).
+    pub max_hardening_retries: usize,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Settings {
+            name: "simulation".into(),
+            time_step_s: 1.0 / 30.0,
+            adaptive_time_step: true,
+            min_time_step_s: 1e-6,
+            time_step_growth: 1.5,
+            gravity_m_s2: [0.0, 0.0, -9.81],
+            threads: 0,
+            newton: NewtonSettings::default(),
+            output: OutputSettings::default(),
+            max_hardening_retries: 40,
+        }
+    }
+}
+
+impl Settings {
+    /// Check the values; errors name the field.
+    pub fn validate(&self) -> crate::Result<()> {
+        use crate::error::check_param;
+        let o = "settings";
+        check_param(
+            o,
+            "time_step_s",
+            self.time_step_s,
+            self.time_step_s > 0.0 && self.time_step_s.is_finite(),
+            "must be positive and finite (s)",
+        )?;
+        check_param(
+            o,
+            "min_time_step_s",
+            self.min_time_step_s,
+            self.min_time_step_s > 0.0 && self.min_time_step_s <= self.time_step_s,
+            "must be positive and at most time_step_s",
+        )?;
+        check_param(
+            o,
+            "time_step_growth",
+            self.time_step_growth,
+            self.time_step_growth >= 1.0 && self.time_step_growth.is_finite(),
+            "must be at least 1",
+        )?;
+        for g in self.gravity_m_s2 {
+            check_param(o, "gravity_m_s2", g, g.is_finite(), "must be finite (m/s²)")?;
+        }
+        let n = &self.newton;
+        check_param(
+            o,
+            "newton.residual_tolerance_n",
+            n.residual_tolerance_n,
+            n.residual_tolerance_n > 0.0,
+            "must be positive (N)",
+        )?;
+        check_param(
+            o,
+            "newton.step_tolerance_m_s",
+            n.step_tolerance_m_s,
+            n.step_tolerance_m_s >= 0.0,
+            "must be non-negative (m/s)",
+        )?;
+        check_param(
+            o,
+            "newton.max_iterations",
+            n.max_iterations as f64,
+            n.max_iterations > 0,
+            "must be at least 1",
+        )?;
+        check_param(
+            o,
+            "newton.cg_relative_tolerance",
+            n.cg_relative_tolerance,
+            n.cg_relative_tolerance > 0.0 && n.cg_relative_tolerance < 1.0,
+            "must lie in (0, 1)",
+        )?;
+        check_param(
+            o,
+            "newton.armijo",
+            n.armijo,
+            n.armijo >= 0.0 && n.armijo < 0.5,
+            "must lie in [0, 0.5)",
+        )?;
+        check_param(
+            o,
+            "output.fps",
+            self.output.fps,
+            self.output.fps >= 0.0 && self.output.fps.is_finite(),
+            "must be non-negative (0 disables frames)",
+        )
+    }
+}
