@@ -1,1 +1,296 @@
-fn main() {}
+//! `stark`: run scenes and benchmarks from the command line.
+
+use clap::{Parser, Subcommand};
+use indicatif::{ProgressBar, ProgressStyle};
+use stark::scenes::{builtin_scenes, find_scene};
+use stark::{RunSummary, Settings, Simulation};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(
+    name = "stark",
+    version,
+    about = "Strongly coupled simulation of rigid and deformable bodies with frictional contact"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run a scene file, a built-in scene (--scene), or the default scene.
+    Run {
+        /// Scene file (TOML or JSON). Without it, the built-in `default` scene runs.
+        scene_file: Option<PathBuf>,
+        /// Run a built-in scene by name (see `stark list`).
+        #[arg(long, conflicts_with = "scene_file")]
+        scene: Option<String>,
+        /// Output directory for frames and logs.
+        #[arg(long, default_value = "output")]
+        out: PathBuf,
+        /// Simulated duration in seconds (default: the scene's).
+        #[arg(long)]
+        duration: Option<f64>,
+        /// Write the run summary as JSON to this file.
+        #[arg(long)]
+        summary_json: Option<PathBuf>,
+        /// Worker threads (0 = all cores).
+        #[arg(long, default_value_t = 0)]
+        threads: usize,
+        /// Do not write VTK frames.
+        #[arg(long)]
+        no_frames: bool,
+        /// No progress bar.
+        #[arg(long)]
+        quiet: bool,
+    },
+    /// List the built-in scenes.
+    List,
+    /// Run the benchmark scenes and report time per simulated second.
+    Bench {
+        /// Scenes to run (default: all benchmark scenes).
+        #[arg(long, value_delimiter = ',')]
+        scenes: Vec<String>,
+        /// Thread counts to run each scene with.
+        #[arg(long, value_delimiter = ',', default_value = "1,2")]
+        threads: Vec<usize>,
+        /// Write the results as JSON to this file.
+        #[arg(long)]
+        json: Option<PathBuf>,
+    },
+}
+
+fn base_settings(out: PathBuf, threads: usize, frames: bool) -> Settings {
+    let mut s = Settings::default();
+    s.output.directory = out;
+    s.threads = threads;
+    s.output.frames = frames;
+    s
+}
+
+fn run_with_progress(
+    sim: &mut Simulation,
+    duration: f64,
+    quiet: bool,
+) -> stark::Result<RunSummary> {
+    let bar = if quiet {
+        ProgressBar::hidden()
+    } else {
+        let bar = ProgressBar::new((duration * 1000.0).round() as u64);
+        bar.set_style(
+            ProgressStyle::with_template(
+                "{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} ms simulated  {msg}",
+            )
+            .expect("valid template"),
+        );
+        bar
+    };
+    let start = sim.time();
+    let result = sim.run_with(duration, |s| {
+        bar.set_position(((s.time() - start) * 1000.0).round() as u64);
+        let sum = s.summary();
+        bar.set_message(format!(
+            "step {} · {:.2} Newton/step",
+            sum.steps, sum.newton_iterations_per_step
+        ));
+        Ok(())
+    });
+    bar.finish_and_clear();
+    result
+}
+
+fn print_summary(s: &RunSummary, out: &std::path::Path) {
+    println!("scene                 {}", s.scene);
+    println!(
+        "simulated time        {:.4} s in {} steps ({} failed attempts, {} hardening retries)",
+        s.simulated_time_s, s.steps, s.failed_steps, s.hardening_retries
+    );
+    println!(
+        "Newton iterations     {} ({:.2} per step), {} CG iterations",
+        s.newton_iterations, s.newton_iterations_per_step, s.cg_iterations
+    );
+    println!(
+        "largest residual      {:.3e} N ({} steps ended by the step-size criterion)",
+        s.max_residual_n, s.steps_converged_by_step_size
+    );
+    println!(
+        "wall time             {:.3} s ({:.3} s per simulated second)",
+        s.wall_time_s, s.wall_time_per_simulated_s
+    );
+    let t = &s.times;
+    let total = (t.prepare_s + t.evaluation_s + t.linear_solve_s + t.line_search_s).max(1e-12);
+    println!(
+        "time per phase        evaluation {:.0}%, linear solve {:.0}%, line search {:.0}%, contact detection {:.0}%",
+        100.0 * t.evaluation_s / total,
+        100.0 * t.linear_solve_s / total,
+        100.0 * t.line_search_s / total,
+        100.0 * t.prepare_s / total
+    );
+    println!(
+        "output                {} frames in {}",
+        s.frames,
+        out.display()
+    );
+}
+
+fn run(
+    scene_file: Option<PathBuf>,
+    scene: Option<String>,
+    out: PathBuf,
+    duration: Option<f64>,
+    summary_json: Option<PathBuf>,
+    threads: usize,
+    frames: bool,
+    quiet: bool,
+) -> stark::Result<()> {
+    let settings = base_settings(out.clone(), threads, frames);
+    let (mut sim, scene_duration) = match (scene_file, scene) {
+        (Some(path), _) => {
+            return Err(stark::StarkError::Scene(format!(
+                "{}: scene files are not supported yet",
+                path.display()
+            )));
+        }
+        (None, name) => {
+            let scene = find_scene(name.as_deref().unwrap_or("default"))?;
+            ((scene.build)(settings)?, scene.duration_s)
+        }
+    };
+    let duration = duration.unwrap_or(scene_duration);
+    if !(duration > 0.0 && duration.is_finite()) {
+        return Err(stark::StarkError::InvalidInput(format!(
+            "--duration must be positive, got {duration}"
+        )));
+    }
+    let summary = run_with_progress(&mut sim, duration, quiet)?;
+    print_summary(&summary, &out);
+    if let Some(path) = summary_json {
+        let text = serde_json::to_string_pretty(&summary).expect("serialisable summary");
+        std::fs::write(&path, text).map_err(|e| stark::StarkError::Output {
+            path: path.display().to_string(),
+            source: e,
+        })?;
+    }
+    Ok(())
+}
+
+/// The original Stark's wall time on this machine kind at 1 thread (reference/benchmark-scenes.md).
+fn original_wall_s(scene: &str) -> Option<f64> {
+    match scene {
+        "hanging_cloth" => Some(6.5),
+        "hanging_deformable_box" => Some(11.6),
+        _ => None,
+    }
+}
+
+fn bench(scenes: Vec<String>, threads: Vec<usize>, json: Option<PathBuf>) -> stark::Result<()> {
+    let names: Vec<String> = if scenes.is_empty() {
+        vec![
+            "hanging_cloth".into(),
+            "hanging_deformable_box".into(),
+            "hanging_cloth_64".into(),
+            "hanging_cloth_128".into(),
+        ]
+    } else {
+        scenes
+    };
+    println!(
+        "{:<26} {:>3} {:>6} {:>9} {:>11} {:>9} {:>8} {:>6} {:>6} {:>6} {:>10}",
+        "scene",
+        "thr",
+        "steps",
+        "wall [s]",
+        "s/sim. s",
+        "Newton/st",
+        "CG/Newt",
+        "eval%",
+        "solve%",
+        "ls%",
+        "original"
+    );
+    let mut results = Vec::new();
+    for name in &names {
+        let scene = find_scene(name)?;
+        for &t in &threads {
+            let dir = std::env::temp_dir().join(format!("stark-bench-{}", std::process::id()));
+            let mut settings = base_settings(dir, t, false);
+            settings.output.step_log = false;
+            let mut sim = (scene.build)(settings)?;
+            let s = sim.run(scene.duration_s)?;
+            let tt = &s.times;
+            let total =
+                (tt.prepare_s + tt.evaluation_s + tt.linear_solve_s + tt.line_search_s).max(1e-12);
+            let original = original_wall_s(name)
+                .map(|w| format!("{w:.1} s"))
+                .unwrap_or_else(|| "-".into());
+            println!(
+                "{:<26} {:>3} {:>6} {:>9.2} {:>11.3} {:>9.2} {:>8.1} {:>6.0} {:>6.0} {:>6.0} {:>10}",
+                name,
+                t,
+                s.steps,
+                s.wall_time_s,
+                s.wall_time_per_simulated_s,
+                s.newton_iterations_per_step,
+                s.cg_iterations as f64 / s.newton_iterations.max(1) as f64,
+                100.0 * tt.evaluation_s / total,
+                100.0 * tt.linear_solve_s / total,
+                100.0 * tt.line_search_s / total,
+                original
+            );
+            results.push(serde_json::json!({ "scene": name, "threads": t, "summary": s, "original_wall_s": original_wall_s(name) }));
+        }
+    }
+    if let Some(path) = json {
+        let text = serde_json::to_string_pretty(&results).expect("serialisable");
+        std::fs::write(&path, text).map_err(|e| stark::StarkError::Output {
+            path: path.display().to_string(),
+            source: e,
+        })?;
+    }
+    Ok(())
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Run {
+            scene_file,
+            scene,
+            out,
+            duration,
+            summary_json,
+            threads,
+            no_frames,
+            quiet,
+        } => run(
+            scene_file,
+            scene,
+            out,
+            duration,
+            summary_json,
+            threads,
+            !no_frames,
+            quiet,
+        ),
+        Command::List => {
+            for s in builtin_scenes() {
+                println!("{:<26} {:>6.2} s  {}", s.name, s.duration_s, s.description);
+            }
+            Ok(())
+        }
+        Command::Bench {
+            scenes,
+            threads,
+            json,
+        } => bench(scenes, threads, json),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -190,6 +190,8 @@ impl<const N: usize> MulAssign for HyperDual<N> {
         *self = *self * o;
     }
 }
+// a/b = a·(1/b): the reciprocal carries the derivatives of the division.
+#[allow(clippy::suspicious_arithmetic_impl)]
 impl<const N: usize> Div for HyperDual<N> {
     type Output = Self;
     #[inline]

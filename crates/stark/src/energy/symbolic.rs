@@ -87,8 +87,8 @@ impl Graph {
     fn add(&mut self, a: Id, b: Id) -> Id {
         match (self.konst(a), self.konst(b)) {
             (Some(x), Some(y)) => return self.c(x + y),
-            (Some(x), None) if x == 0.0 => return b,
-            (None, Some(y)) if y == 0.0 => return a,
+            (Some(0.0), None) => return b,
+            (None, Some(0.0)) => return a,
             _ => {}
         }
         if let Op::Neg(x) = self.ops[b.0 as usize] {
@@ -108,12 +108,12 @@ impl Graph {
     fn mul(&mut self, a: Id, b: Id) -> Id {
         match (self.konst(a), self.konst(b)) {
             (Some(x), Some(y)) => return self.c(x * y),
-            (Some(x), _) if x == 0.0 => return a,
-            (_, Some(y)) if y == 0.0 => return b,
-            (Some(x), _) if x == 1.0 => return b,
-            (_, Some(y)) if y == 1.0 => return a,
-            (Some(x), _) if x == -1.0 => return self.neg(b),
-            (_, Some(y)) if y == -1.0 => return self.neg(a),
+            (Some(0.0), _) => return a,
+            (_, Some(0.0)) => return b,
+            (Some(1.0), _) => return b,
+            (_, Some(1.0)) => return a,
+            (Some(-1.0), _) => return self.neg(b),
+            (_, Some(-1.0)) => return self.neg(a),
             _ => {}
         }
         // Pull negations out so that −a·b and a·(−b) share a node.

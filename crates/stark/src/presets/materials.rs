@@ -22,6 +22,7 @@ pub enum Bending {
 /// Material of a rod or cable made of segments.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
+#[derive(Default)]
 pub struct LineMaterial {
     /// Inertia (density in kg/m).
     pub inertia: InertiaParams,
@@ -44,20 +45,12 @@ pub struct SurfaceMaterial {
 /// Material of a volumetric solid made of tetrahedra.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
+#[derive(Default)]
 pub struct VolumeMaterial {
     /// Inertia (density in kg/m³).
     pub inertia: InertiaParams,
     /// Volumetric strain.
     pub strain: TetStrainParams,
-}
-
-impl Default for LineMaterial {
-    fn default() -> Self {
-        LineMaterial {
-            inertia: InertiaParams::default(),
-            strain: SegmentStrainParams::default(),
-        }
-    }
 }
 
 impl Default for SurfaceMaterial {
@@ -66,15 +59,6 @@ impl Default for SurfaceMaterial {
             inertia: InertiaParams::default(),
             strain: TriangleStrainParams::default(),
             bending: Bending::Flat(FlatBendingParams::default()),
-        }
-    }
-}
-
-impl Default for VolumeMaterial {
-    fn default() -> Self {
-        VolumeMaterial {
-            inertia: InertiaParams::default(),
-            strain: TetStrainParams::default(),
         }
     }
 }

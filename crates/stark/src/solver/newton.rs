@@ -260,7 +260,8 @@ pub fn solve(
                     .is_ok();
                 indefinite = !solved;
             }
-            if !solved && !(indefinite && !project) {
+            // A failed factorisation of an unprojected Hessian means "project"; otherwise use CG.
+            if !solved && (!indefinite || project) {
                 let g_norm = dot(&ws.gradient, &ws.gradient).sqrt();
                 let eta = settings.cg_relative_tolerance.min((residual / r0).sqrt());
                 let tol = (eta * g_norm).max(0.1 * settings.residual_tolerance_n * dt);
