@@ -1,0 +1,3 @@
+//! The physics claims, one per file.
+
+pub mod cantilever_matches_linear_elasticity;
