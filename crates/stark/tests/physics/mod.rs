@@ -1,4 +1,7 @@
+//! The physics claims, one per file.
+
 pub mod bad_input_gives_clear_errors;
+pub mod cantilever_matches_linear_elasticity;
 pub mod default_scene_converges_to_tolerance;
 pub mod free_fall_matches_backward_euler;
 pub mod quasistatic_stretch_converges;
