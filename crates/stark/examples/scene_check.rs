@@ -16,11 +16,21 @@ fn main() {
     settings.output.frames = false;
     settings.output.directory = "/tmp/stark_out".into();
     let mut sim = (scene.build)(settings).unwrap();
+    if let Some(eta) = std::env::args().nth(3) {
+        sim.settings.newton.cg_relative_tolerance = eta.parse().unwrap();
+    }
     let mut iters = Vec::new();
+    let (mut ls, mut projected) = (0, 0);
     let t = std::time::Instant::now();
-    while sim.time() < scene.duration_s - 1e-3 * sim.dt() {
+    let max_steps: usize = std::env::args()
+        .nth(4)
+        .map(|s| s.parse().unwrap())
+        .unwrap_or(usize::MAX);
+    while sim.time() < scene.duration_s - 1e-3 * sim.dt() && iters.len() < max_steps {
         let r = sim.step().unwrap();
         iters.push(r.newton_iterations);
+        ls += r.line_search_evaluations;
+        projected += r.projected as usize;
     }
     let s = sim.summary();
     println!(
@@ -33,6 +43,8 @@ fn main() {
         s.max_residual_n
     );
     println!("times: {:?}", s.times);
+    println!("assembly (evaluate, gather) {:?}", sim.assembly_timing());
+    println!("line-search evaluations {ls}, steps with projection {projected}");
     println!("iterations: {:?}", &iters[..iters.len().min(40)]);
     let x = &sim.nodes.x;
     let n = x.len() as f64;

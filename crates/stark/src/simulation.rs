@@ -41,6 +41,8 @@ pub struct StepReport {
     pub cg_iterations: usize,
     /// Smallest valid step fraction met in the line searches (below 1: CCD limited a step).
     pub min_step_fraction: f64,
+    /// Element Hessians were projected (always, or because the exact one was indefinite).
+    pub projected: bool,
     /// Attempts repeated because a model hardened a stiffness.
     pub hardening_retries: usize,
     /// Attempts that failed and halved dt.
@@ -164,6 +166,11 @@ impl Simulation {
     /// Totals so far.
     pub fn summary(&self) -> &RunSummary {
         &self.summary
+    }
+
+    /// Wall time spent in element evaluation and in gathering the global system, s.
+    pub fn assembly_timing(&self) -> (f64, f64) {
+        self.newton.assembler.timing
     }
 
     /// Gravity, m/s².
@@ -427,6 +434,7 @@ impl Simulation {
                         line_search_evaluations: report.line_search_evaluations,
                         cg_iterations: report.cg_iterations,
                         min_step_fraction: report.min_step_fraction,
+                        projected: report.projected,
                         hardening_retries,
                         failed_attempts,
                         total_newton_iterations: total_newton,

@@ -139,19 +139,22 @@ pub fn dual_derivatives<P: Potential<N>, const N: usize>(
     d
 }
 
-/// Element derivatives by the fastest available path; the flag tells whether the Hessian is
-/// already projected.
+/// Element derivatives by the fastest available path, written into `out`; returns whether the
+/// Hessian is already projected.
 pub fn element_derivatives<P: Potential<N>, const N: usize>(
     p: &P,
     e: usize,
     stencil: &Stencil<N>,
     project: bool,
-) -> (HyperDual<N>, bool) {
-    let mut d = HyperDual::<N>::constant(0.0);
-    match p.derivatives(e, stencil, project, &mut d) {
-        FastDerivatives::Exact => (d, false),
-        FastDerivatives::Projected => (d, true),
-        FastDerivatives::Unavailable => (dual_derivatives(p, e, stencil), false),
+    out: &mut HyperDual<N>,
+) -> bool {
+    match p.derivatives(e, stencil, project, out) {
+        FastDerivatives::Exact => false,
+        FastDerivatives::Projected => true,
+        FastDerivatives::Unavailable => {
+            *out = dual_derivatives(p, e, stencil);
+            false
+        }
     }
 }
 
@@ -240,37 +243,41 @@ impl<P: Potential<N>, const N: usize> EnergyTerm for PotentialTerm<P, N> {
         let dt = state.dt;
         let n = 3 * N;
         let convex = self.potential.is_convex();
-        out.par_chunks_mut(stride).enumerate().for_each(|(e, o)| {
-            let stencil = Stencil::new(self.potential.nodes(e), state);
-            let project = mode == EvalMode::ProjectedHessian && !convex;
-            let (mut d, projected) = element_derivatives(&self.potential, e, &stencil, project);
-            // Deformable map: ∂x/∂v = dt·I, so ∇ᵥ = dt ∇ₓ and Hᵥ = dt² Hₓ (projection commutes
-            // with the positive scaling).
-            let h = d
-                .hess
-                .as_flattened_mut()
-                .as_flattened_mut()
-                .as_flattened_mut();
-            if project && !projected {
-                project_psd(h, n);
-            }
-            o[0] = d.value;
-            for (k, g) in d.grad.as_flattened().iter().enumerate() {
-                o[1 + k] = dt * g;
-            }
-            let dt2 = dt * dt;
-            let base = 1 + 3 * N;
-            for a in 0..N {
-                for b in 0..N {
-                    let blk = &mut o[base + 9 * (a * N + b)..base + 9 * (a * N + b) + 9];
-                    for i in 0..3 {
-                        for j in 0..3 {
-                            blk[3 * i + j] = dt2 * h[(3 * a + i) * n + 3 * b + j];
+        let project = mode == EvalMode::ProjectedHessian && !convex;
+        // Scratch reused across the elements of a task (a fast path overwrites all of it).
+        out.par_chunks_mut(stride).enumerate().for_each_init(
+            || Box::new(HyperDual::<N>::constant(0.0)),
+            |d, (e, o)| {
+                let stencil = Stencil::new(self.potential.nodes(e), state);
+                let projected = element_derivatives(&self.potential, e, &stencil, project, d);
+                // Deformable map: ∂x/∂v = dt·I, so ∇ᵥ = dt ∇ₓ and Hᵥ = dt² Hₓ (projection commutes
+                // with the positive scaling).
+                let h = d
+                    .hess
+                    .as_flattened_mut()
+                    .as_flattened_mut()
+                    .as_flattened_mut();
+                if project && !projected {
+                    project_psd(h, n);
+                }
+                o[0] = d.value;
+                for (k, g) in d.grad.as_flattened().iter().enumerate() {
+                    o[1 + k] = dt * g;
+                }
+                let dt2 = dt * dt;
+                let base = 1 + 3 * N;
+                for a in 0..N {
+                    for b in 0..N {
+                        let blk = &mut o[base + 9 * (a * N + b)..base + 9 * (a * N + b) + 9];
+                        for i in 0..3 {
+                            for j in 0..3 {
+                                blk[3 * i + j] = dt2 * h[(3 * a + i) * n + 3 * b + j];
+                            }
                         }
                     }
                 }
-            }
-        });
+            },
+        );
     }
     fn before_step(&mut self, state: &EvalState) {
         self.potential.before_step(state)
