@@ -62,6 +62,10 @@ pub enum StarkError {
     /// A scene file is invalid.
     #[error("{0}")]
     Scene(String),
+    /// A scene file is invalid: the error names the file, the line and column where known, the
+    /// entry and the field.
+    #[error(transparent)]
+    SceneFile(#[from] crate::io::scene::SceneError),
     /// Writing output failed.
     #[error("cannot write '{path}': {source}")]
     Output {

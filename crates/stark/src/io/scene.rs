@@ -1,0 +1,2277 @@
+//! Declarative scene files: a TOML document (or JSON, for files ending in `.json`) that builds a
+//! [`Simulation`] through the same calls a Rust program would make.
+//!
+//! The format mirrors the API, so names, units and defaults are those of the Rust structs:
+//!
+//! - `[settings]` is deserialised straight into [`Settings`] (every setting, same names);
+//!   `duration_s` is the simulated time.
+//! - `[[surface]]`, `[[volume]]` and `[[line]]` call [`Simulation::add_surface`],
+//!   [`Simulation::add_volume`] and [`Simulation::add_line`]. Each has a unique `name` and one
+//!   geometry: a generator (`grid` or `segments`), a `mesh` file (relative paths are resolved
+//!   against the scene file's directory) or inline `vertices_m` + `elements`; an optional placement
+//!   (`scale`, then `rotate_deg`, then `translate_m`); and a `material`: a preset name or a table
+//!   `{ preset = "...", strain = { ... }, ... }` whose sub-tables override single fields of the
+//!   preset. The override is merged into the serialised preset and the result deserialised, so
+//!   field names and checks are exactly those of [`SurfaceMaterial`], [`VolumeMaterial`] and
+//!   [`LineMaterial`].
+//! - `[[prescribed]]` selects nodes of an object (`inside_box`, `outside_box`, `nodes` or
+//!   `all`) and pulls them to targets ([`PrescribedParams`]); an optional [`Motion`] moves the
+//!   targets through [`Simulation::add_time_event`].
+//! - `[[attachment]]` glues nodes of one object to nodes or triangles of another
+//!   ([`Attachments`](crate::deformables::Attachments)).
+//! - `[[gravity_ramp]]` changes gravity linearly over a time interval.
+//!
+//! Every error is a [`SceneError`] naming the file, the line and column where they are known
+//! (always for TOML; for JSON only for syntax, type and unknown-field errors of the file's
+//! structure) and the entry and field, e.g.
+//!
+//! ```text
+//! hanging.toml:14:3: unknown field `youngs_modulu` in surface 'cloth' material.strain, expected one of ...
+//! ```
+//!
+//! `docs/scene-format.md` documents every table and field.
+//!
+//! ```
+//! let text = r#"
+//! duration_s = 1.0
+//! [[surface]]
+//! name = "cloth"
+//! grid = { size_m = [1.0, 1.0], quads = [4, 4] }
+//! material = "cotton_fabric"
+//! [[prescribed]]
+//! object = "cloth"
+//! inside_box = { center_m = [0.5, 0.5, 0.0], size_m = [0.01, 0.01, 0.01] }
+//! stiffness = 1e6
+//! "#;
+//! let scene = stark::io::scene::parse_scene(text, "doc.toml", std::path::Path::new(".")).unwrap();
+//! assert_eq!(scene.simulation.nodes.len(), 25);
+//! assert_eq!(scene.name, "doc");
+//! ```
+
+use crate::deformables::{AttachmentHandle, AttachmentParams, PrescribedHandle, PrescribedParams};
+use crate::error::{Result, StarkError};
+use crate::geometry::mesh;
+use crate::io::mesh_files::{load_tet_mesh, load_triangle_mesh};
+use crate::presets::meshes;
+use crate::presets::{
+    LineHandle, LineMaterial, SurfaceHandle, SurfaceMaterial, VolumeHandle, VolumeMaterial,
+};
+use crate::simulation::Simulation;
+use crate::solver::Settings;
+use nalgebra::{Rotation3, Unit, Vector3};
+use serde::de::DeserializeOwned;
+use serde::{Deserialize, Serialize};
+use std::fmt;
+use std::fmt::Write as _;
+use std::ops::Range;
+use std::path::Path;
+use toml::de::{DeTable, DeValue};
+
+// ------------------------------------------------------------------------------------------
+// Public API
+// ------------------------------------------------------------------------------------------
+
+/// A simulation built from a scene file, ready to run for `duration_s`.
+pub struct LoadedScene {
+    /// The simulation with every object, boundary condition and event of the file.
+    pub simulation: Simulation,
+    /// Simulated time the scene asks for, s.
+    pub duration_s: f64,
+    /// Scene name: `settings.name` if the file sets it, else the file name without extension.
+    pub name: String,
+    /// The objects in creation order (surfaces, then volumes, then lines, each in file order).
+    pub objects: Vec<(String, SceneObject)>,
+    /// The `[[prescribed]]` entries in file order.
+    pub prescribed: Vec<ScenePrescribed>,
+    /// The `[[attachment]]` entries in file order, with their labels.
+    pub attachments: Vec<(String, AttachmentHandle)>,
+}
+
+impl LoadedScene {
+    /// The object called `name`.
+    pub fn object(&self, name: &str) -> Option<&SceneObject> {
+        self.objects.iter().find(|(n, _)| n == name).map(|(_, o)| o)
+    }
+}
+
+/// Handles of one object of a scene.
+#[derive(Clone, Copy, Debug)]
+pub enum SceneObject {
+    /// A `[[surface]]`.
+    Surface(SurfaceHandle),
+    /// A `[[volume]]`.
+    Volume(VolumeHandle),
+    /// A `[[line]]`.
+    Line(LineHandle),
+}
+
+impl SceneObject {
+    /// Its node set.
+    pub fn nodes(&self) -> crate::deformables::NodeSetHandle {
+        match self {
+            SceneObject::Surface(h) => h.nodes,
+            SceneObject::Volume(h) => h.nodes,
+            SceneObject::Line(h) => h.nodes,
+        }
+    }
+}
+
+/// One `[[prescribed]]` entry of a scene.
+#[derive(Clone, Debug)]
+pub struct ScenePrescribed {
+    /// Name of the object whose nodes are prescribed.
+    pub object: String,
+    /// Handle of the group.
+    pub handle: PrescribedHandle,
+    /// Number of nodes selected.
+    pub nodes: usize,
+    /// Scripted motion of the targets, if any.
+    pub motion: Option<Motion>,
+}
+
+/// Scripted rigid motion of prescribed targets: at time `t` the targets are the reference
+/// positions (the nodes' positions when prescribed) rotated by `ω·τ` about `axis` through
+/// `center_m` and then translated by `v·τ`, with `τ = min(t, end_s) − start_s` (no motion
+/// before `start_s`; the pose at `end_s` is held afterwards).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Motion {
+    /// Time the motion starts, s (default: 0).
+    pub start_s: f64,
+    /// Time the motion stops, s (default: ∞, never; TOML `inf`).
+    pub end_s: f64,
+    /// Linear velocity `v`, m/s (default: 0).
+    pub velocity_m_s: [f64; 3],
+    /// Angular velocity `ω`, degrees/s, right-handed about `axis` (default: 0).
+    pub angular_velocity_deg_s: f64,
+    /// Rotation axis (normalised here); required when `angular_velocity_deg_s` ≠ 0
+    /// (default: none).
+    pub axis: Option<[f64; 3]>,
+    /// A point on the rotation axis, m (default: the origin).
+    pub center_m: [f64; 3],
+}
+
+impl Default for Motion {
+    fn default() -> Self {
+        Motion {
+            start_s: 0.0,
+            end_s: f64::INFINITY,
+            velocity_m_s: [0.0; 3],
+            angular_velocity_deg_s: 0.0,
+            axis: None,
+            center_m: [0.0; 3],
+        }
+    }
+}
+
+impl Motion {
+    /// Check the values; the error names the field.
+    pub fn validate(&self) -> std::result::Result<(), (&'static str, String)> {
+        if !self.start_s.is_finite() {
+            return Err((
+                "start_s",
+                format!("start_s = {} must be finite", self.start_s),
+            ));
+        }
+        if self.end_s.is_nan() || self.end_s <= self.start_s {
+            return Err((
+                "end_s",
+                format!(
+                    "end_s = {} must be greater than start_s = {}",
+                    self.end_s, self.start_s
+                ),
+            ));
+        }
+        if !self.velocity_m_s.iter().all(|v| v.is_finite()) {
+            return Err(("velocity_m_s", "velocity_m_s must be finite".into()));
+        }
+        if !self.center_m.iter().all(|v| v.is_finite()) {
+            return Err(("center_m", "center_m must be finite".into()));
+        }
+        if !self.angular_velocity_deg_s.is_finite() {
+            return Err((
+                "angular_velocity_deg_s",
+                "angular_velocity_deg_s must be finite".into(),
+            ));
+        }
+        match self.axis {
+            Some(a) if !a.iter().all(|v| v.is_finite()) || Vector3::from(a).norm() == 0.0 => {
+                Err(("axis", format!("axis {a:?} must be finite and non-zero")))
+            }
+            None if self.angular_velocity_deg_s != 0.0 => Err((
+                "angular_velocity_deg_s",
+                "a rotating motion needs an `axis`".into(),
+            )),
+            _ => Ok(()),
+        }
+    }
+
+    /// The target transform at time `t`: targets are `R·p + translation` for the reference
+    /// positions `p`.
+    pub fn transform_at(&self, t: f64) -> (Vector3<f64>, Rotation3<f64>) {
+        let tau = (t.min(self.end_s) - self.start_s).max(0.0);
+        let angle = (self.angular_velocity_deg_s * tau).to_radians();
+        let rotation = match self.axis {
+            Some(a) if angle != 0.0 => {
+                Rotation3::from_axis_angle(&Unit::new_normalize(Vector3::from(a)), angle)
+            }
+            _ => Rotation3::identity(),
+        };
+        let c = Vector3::from(self.center_m);
+        let translation = c - rotation * c + Vector3::from(self.velocity_m_s) * tau;
+        (translation, rotation)
+    }
+
+    /// Move the targets of group `h` to their pose at time `t`.
+    pub fn apply(&self, sim: &mut Simulation, h: PrescribedHandle, t: f64) -> Result<()> {
+        let (translation, rotation) = self.transform_at(t);
+        sim.deformables
+            .prescribed
+            .set_transform(h, translation, rotation)
+    }
+}
+
+/// An invalid scene file: where the problem is and what it is.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SceneError {
+    /// The file as given to the loader.
+    pub file: String,
+    /// 1-based line, where known.
+    pub line: Option<usize>,
+    /// 1-based column in characters, where known.
+    pub column: Option<usize>,
+    /// The entry and field, e.g. `surface 'cloth' material.strain` (empty for the whole file).
+    pub path: String,
+    /// What is wrong.
+    pub message: String,
+}
+
+impl fmt::Display for SceneError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.file)?;
+        if let Some(line) = self.line {
+            write!(f, ":{line}")?;
+            if let Some(column) = self.column {
+                write!(f, ":{column}")?;
+            }
+        }
+        write!(f, ": ")?;
+        if self.path.is_empty() {
+            write!(f, "{}", self.message)
+        } else if let Some((head, tail)) = self.message.split_once(", expected") {
+            write!(f, "{head} in {}, expected{tail}", self.path)
+        } else {
+            write!(f, "{} in {}", self.message, self.path)
+        }
+    }
+}
+
+impl std::error::Error for SceneError {}
+
+/// Load a scene file (TOML, or JSON if the name ends in `.json`). Relative mesh paths are
+/// resolved against the file's directory.
+pub fn load_scene(path: &Path) -> Result<LoadedScene> {
+    load_scene_with(path, |_| {})
+}
+
+/// [`load_scene`], letting `configure` change the settings (output directory, threads, ...)
+/// after they are read and before the simulation is built.
+pub fn load_scene_with(path: &Path, configure: impl FnOnce(&mut Settings)) -> Result<LoadedScene> {
+    let file = path.display().to_string();
+    let text = std::fs::read_to_string(path).map_err(|e| SceneError {
+        file: file.clone(),
+        line: None,
+        column: None,
+        path: String::new(),
+        message: format!("cannot read the scene file: {e}"),
+    })?;
+    let base_dir = path.parent().unwrap_or(Path::new("."));
+    parse_scene_with(&text, &file, base_dir, configure)
+}
+
+/// Build a scene from its text. `file_name` names the file in errors and chooses the format
+/// (JSON if it ends in `.json`, TOML otherwise); relative mesh paths are resolved against
+/// `base_dir`.
+pub fn parse_scene(text: &str, file_name: &str, base_dir: &Path) -> Result<LoadedScene> {
+    parse_scene_with(text, file_name, base_dir, |_| {})
+}
+
+/// [`parse_scene`], letting `configure` change the settings (output directory, threads, ...)
+/// after they are read and before the simulation is built.
+pub fn parse_scene_with(
+    text: &str,
+    file_name: &str,
+    base_dir: &Path,
+    configure: impl FnOnce(&mut Settings),
+) -> Result<LoadedScene> {
+    if file_name.to_ascii_lowercase().ends_with(".json") {
+        let value: serde_json::Value =
+            serde_json::from_str(text).map_err(|e| json_error(file_name, &e))?;
+        let file: SceneFile = serde_json::from_str(text).map_err(|e| json_error(file_name, &e))?;
+        let ctx = Ctx {
+            file: file_name,
+            text,
+            tree: Tree::Json(&value),
+            root_span: None,
+        };
+        Ok(build(file, &ctx, base_dir, configure)?)
+    } else {
+        let doc = DeTable::parse(text).map_err(|e| {
+            let (line, column) = e.span().map(|s| line_col(text, s.start)).unzip();
+            SceneError {
+                file: file_name.to_string(),
+                line,
+                column,
+                path: String::new(),
+                message: e.message().trim_end().to_string(),
+            }
+        })?;
+        let ctx = Ctx {
+            file: file_name,
+            text,
+            tree: Tree::Toml(doc.get_ref()),
+            root_span: Some(doc.span()),
+        };
+        let file: SceneFile = toml::from_str(text).map_err(|e| ctx.toml_error(&e))?;
+        Ok(build(file, &ctx, base_dir, configure)?)
+    }
+}
+
+// ------------------------------------------------------------------------------------------
+// The file's structure
+// ------------------------------------------------------------------------------------------
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SceneFile {
+    #[serde(default)]
+    settings: Settings,
+    duration_s: f64,
+    #[serde(default)]
+    surface: Vec<SurfaceEntry>,
+    #[serde(default)]
+    volume: Vec<VolumeEntry>,
+    #[serde(default)]
+    line: Vec<LineEntry>,
+    #[serde(default)]
+    prescribed: Vec<PrescribedEntry>,
+    #[serde(default)]
+    attachment: Vec<AttachmentEntry>,
+    #[serde(default)]
+    gravity_ramp: Vec<GravityRampEntry>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SurfaceGrid {
+    size_m: [f64; 2],
+    quads: [usize; 2],
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct VolumeGrid {
+    size_m: [f64; 3],
+    cells: [usize; 3],
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LineSegments {
+    begin_m: [f64; 3],
+    end_m: [f64; 3],
+    count: usize,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Rotate {
+    angle: f64,
+    axis: [f64; 3],
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SurfaceEntry {
+    name: String,
+    grid: Option<SurfaceGrid>,
+    mesh: Option<String>,
+    vertices_m: Option<Vec<[f64; 3]>>,
+    elements: Option<Vec<[usize; 3]>>,
+    translate_m: Option<[f64; 3]>,
+    rotate_deg: Option<Rotate>,
+    scale: Option<f64>,
+    material: toml::Value,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct VolumeEntry {
+    name: String,
+    grid: Option<VolumeGrid>,
+    mesh: Option<String>,
+    vertices_m: Option<Vec<[f64; 3]>>,
+    elements: Option<Vec<[usize; 4]>>,
+    translate_m: Option<[f64; 3]>,
+    rotate_deg: Option<Rotate>,
+    scale: Option<f64>,
+    material: toml::Value,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LineEntry {
+    name: String,
+    segments: Option<LineSegments>,
+    vertices_m: Option<Vec<[f64; 3]>>,
+    elements: Option<Vec<[usize; 2]>>,
+    translate_m: Option<[f64; 3]>,
+    rotate_deg: Option<Rotate>,
+    scale: Option<f64>,
+    material: toml::Value,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct BoxSelection {
+    center_m: [f64; 3],
+    size_m: [f64; 3],
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PrescribedEntry {
+    object: String,
+    inside_box: Option<BoxSelection>,
+    outside_box: Option<BoxSelection>,
+    nodes: Option<Vec<usize>>,
+    all: Option<bool>,
+    stiffness: Option<f64>,
+    tolerance_m: Option<f64>,
+    motion: Option<Motion>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct AttachmentEntry {
+    name: Option<String>,
+    a: String,
+    b: String,
+    nodes_a: Option<Vec<usize>>,
+    nodes_b: Option<Vec<usize>>,
+    triangles_b: Option<Vec<[usize; 3]>>,
+    barycentric_b: Option<Vec<[f64; 3]>>,
+    within_m: Option<f64>,
+    stiffness: Option<f64>,
+    tolerance_m: Option<f64>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct GravityRampEntry {
+    start_s: f64,
+    end_s: f64,
+    from_m_s2: Option<[f64; 3]>,
+    to_m_s2: [f64; 3],
+}
+
+// ------------------------------------------------------------------------------------------
+// Locating errors
+// ------------------------------------------------------------------------------------------
+
+/// One step of a path into the document.
+#[derive(Clone, Debug, PartialEq)]
+enum Seg {
+    Key(String),
+    Index(usize),
+}
+
+/// A path into the document.
+#[derive(Clone, Debug, Default, PartialEq)]
+struct At(Vec<Seg>);
+
+impl At {
+    fn entry(kind: &str, index: usize) -> At {
+        At(vec![Seg::Key(kind.into()), Seg::Index(index)])
+    }
+    fn key(&self, key: &str) -> At {
+        let mut p = self.clone();
+        p.0.push(Seg::Key(key.into()));
+        p
+    }
+    fn keys<S: AsRef<str>>(&self, keys: &[S]) -> At {
+        let mut p = self.clone();
+        p.0.extend(keys.iter().map(|k| Seg::Key(k.as_ref().into())));
+        p
+    }
+}
+
+/// Entry arrays whose items are described by name rather than by index.
+const ENTRY_KINDS: [&str; 6] = [
+    "surface",
+    "volume",
+    "line",
+    "prescribed",
+    "attachment",
+    "gravity_ramp",
+];
+
+/// The untyped document, for spans (TOML only) and entry labels.
+enum Tree<'a> {
+    Toml(&'a DeTable<'a>),
+    Json(&'a serde_json::Value),
+}
+
+impl Tree<'_> {
+    fn item_str(&self, kind: &str, index: usize, key: &str) -> Option<String> {
+        match self {
+            Tree::Toml(doc) => doc
+                .get(kind)?
+                .get_ref()
+                .as_array()?
+                .get(index)?
+                .get_ref()
+                .as_table()?
+                .get(key)?
+                .get_ref()
+                .as_str()
+                .map(str::to_string),
+            Tree::Json(v) => v
+                .get(kind)?
+                .get(index)?
+                .get(key)?
+                .as_str()
+                .map(str::to_string),
+        }
+    }
+}
+
+struct Ctx<'a> {
+    file: &'a str,
+    text: &'a str,
+    tree: Tree<'a>,
+    /// Span of the whole TOML document (errors there, such as a missing top-level field, have no
+    /// path).
+    root_span: Option<Range<usize>>,
+}
+
+/// 1-based line and column (in characters) of a byte offset.
+fn line_col(text: &str, offset: usize) -> (usize, usize) {
+    let offset = offset.min(text.len());
+    let before = &text[..offset];
+    let line = before.matches('\n').count() + 1;
+    let line_start = before.rfind('\n').map_or(0, |i| i + 1);
+    (line, before[line_start..].chars().count() + 1)
+}
+
+/// The deepest path whose key or value span contains `pos`.
+fn locate_in_table(table: &DeTable, pos: usize, path: &mut Vec<Seg>) -> bool {
+    for (key, value) in table.iter() {
+        path.push(Seg::Key(key.get_ref().to_string()));
+        if key.span().contains(&pos) || locate_in_value(value.get_ref(), pos, path) {
+            return true;
+        }
+        if value.span().contains(&pos) {
+            return true;
+        }
+        path.pop();
+    }
+    false
+}
+
+fn locate_in_value(value: &DeValue, pos: usize, path: &mut Vec<Seg>) -> bool {
+    match value {
+        DeValue::Table(t) => locate_in_table(t, pos, path),
+        DeValue::Array(a) => {
+            for (i, item) in a.iter().enumerate() {
+                path.push(Seg::Index(i));
+                if locate_in_value(item.get_ref(), pos, path) || item.span().contains(&pos) {
+                    return true;
+                }
+                path.pop();
+            }
+            false
+        }
+        _ => false,
+    }
+}
+
+impl Ctx<'_> {
+    /// Span of the deepest element of `at` that exists in the document (a key's span for keys).
+    fn span_of(&self, at: &At) -> Option<Range<usize>> {
+        let Tree::Toml(doc) = self.tree else {
+            return None;
+        };
+        let mut span = None;
+        let mut table: Option<&DeTable> = Some(doc);
+        let mut array: Option<&[toml::Spanned<DeValue>]> = None;
+        for seg in &at.0 {
+            let value = match seg {
+                Seg::Key(k) => {
+                    let Some((key, value)) = table.and_then(|t| t.get_key_value(k.as_str())) else {
+                        break;
+                    };
+                    span = Some(key.span());
+                    value
+                }
+                Seg::Index(i) => {
+                    let Some(item) = array.and_then(|a| a.get(*i)) else {
+                        break;
+                    };
+                    span = Some(item.span());
+                    item
+                }
+            };
+            table = value.get_ref().as_table();
+            array = value.get_ref().as_array().map(|a| &a[..]);
+        }
+        span
+    }
+
+    fn entry_label(&self, kind: &str, index: usize) -> String {
+        let field = |k: &str| self.tree.item_str(kind, index, k);
+        let n = index + 1;
+        match (field("name"), field("object"), field("a"), field("b")) {
+            (Some(name), ..) => format!("{kind} '{name}'"),
+            (None, Some(object), ..) => format!("{kind} #{n} (object '{object}')"),
+            (None, None, Some(a), Some(b)) => format!("{kind} #{n} ('{a}' to '{b}')"),
+            _ => format!("{kind} #{n}"),
+        }
+    }
+
+    fn describe(&self, at: &At) -> String {
+        let mut out = String::new();
+        let mut rest = &at.0[..];
+        if let [Seg::Key(kind), Seg::Index(i), tail @ ..] = &at.0[..] {
+            if ENTRY_KINDS.contains(&kind.as_str()) {
+                out = self.entry_label(kind, *i);
+                rest = tail;
+                if !rest.is_empty() {
+                    out.push(' ');
+                }
+            }
+        }
+        for (j, seg) in rest.iter().enumerate() {
+            match seg {
+                Seg::Key(k) => {
+                    if j > 0 {
+                        out.push('.');
+                    }
+                    out.push_str(k);
+                }
+                Seg::Index(i) => {
+                    let _ = write!(out, "[{i}]");
+                }
+            }
+        }
+        out
+    }
+
+    /// An error at `at`; for "unknown field `x`" the path names the table holding `x`.
+    fn err(&self, at: &At, message: impl Into<String>) -> SceneError {
+        let message = message.into();
+        let (line, column) = self
+            .span_of(at)
+            .map(|s| line_col(self.text, s.start))
+            .unzip();
+        let mut shown = at.clone();
+        if let (Some(Seg::Key(last)), Some(unknown)) = (
+            shown.0.last(),
+            message
+                .strip_prefix("unknown field `")
+                .and_then(|m| m.split('`').next()),
+        ) {
+            if last == unknown {
+                shown.0.pop();
+            }
+        }
+        SceneError {
+            file: self.file.to_string(),
+            line,
+            column,
+            path: self.describe(&shown),
+            message,
+        }
+    }
+
+    /// A deserialisation error of the TOML document, located through its span.
+    fn toml_error(&self, e: &toml::de::Error) -> SceneError {
+        let mut path = Vec::new();
+        let mut line_column = None;
+        if let Some(span) = e.span() {
+            line_column = Some(line_col(self.text, span.start));
+            if let (Tree::Toml(doc), false) = (&self.tree, self.root_span == Some(span.clone())) {
+                if !locate_in_table(doc, span.start, &mut path) {
+                    path.clear();
+                }
+            }
+        }
+        let mut err = self.err(&At(path), e.message().trim_end());
+        if let Some((line, column)) = line_column {
+            err.line = Some(line);
+            err.column = Some(column);
+        }
+        err
+    }
+
+    /// A library error raised while building the entry at `at`.
+    fn stark(&self, at: &At, e: StarkError) -> SceneError {
+        self.err(at, e.to_string())
+    }
+}
+
+fn json_error(file: &str, e: &serde_json::Error) -> SceneError {
+    let text = e.to_string();
+    let message = text
+        .rsplit_once(" at line ")
+        .map_or(text.as_str(), |(m, _)| m)
+        .to_string();
+    SceneError {
+        file: file.to_string(),
+        line: Some(e.line()),
+        column: Some(e.column()),
+        path: String::new(),
+        message,
+    }
+}
+
+// ------------------------------------------------------------------------------------------
+// Materials: a preset plus overrides merged in TOML-value space
+// ------------------------------------------------------------------------------------------
+
+trait MaterialPresets: Serialize + DeserializeOwned {
+    const KIND: &'static str;
+    fn presets() -> Vec<(&'static str, Self)>;
+}
+
+impl MaterialPresets for SurfaceMaterial {
+    const KIND: &'static str = "surface";
+    fn presets() -> Vec<(&'static str, Self)> {
+        vec![
+            ("cotton_fabric", SurfaceMaterial::cotton_fabric()),
+            ("default", SurfaceMaterial::default()),
+        ]
+    }
+}
+
+impl MaterialPresets for VolumeMaterial {
+    const KIND: &'static str = "volume";
+    fn presets() -> Vec<(&'static str, Self)> {
+        vec![
+            ("soft_rubber", VolumeMaterial::soft_rubber()),
+            ("default", VolumeMaterial::default()),
+        ]
+    }
+}
+
+impl MaterialPresets for LineMaterial {
+    const KIND: &'static str = "line";
+    fn presets() -> Vec<(&'static str, Self)> {
+        vec![
+            ("elastic_rubber_band", LineMaterial::elastic_rubber_band()),
+            ("default", LineMaterial::default()),
+        ]
+    }
+}
+
+/// A preset value that is a one-key table (an externally tagged enum such as `bending`) is
+/// replaced, not merged, by a one-key override naming another variant.
+fn is_variant_switch(base: &toml::Table, over: &toml::Table) -> bool {
+    base.len() == 1 && over.len() == 1 && base.keys().next() != over.keys().next()
+}
+
+/// Merge `over` into `base`: tables key by key, anything else replaced.
+fn merge(base: &mut toml::Value, over: &toml::Value) {
+    match (base, over) {
+        (toml::Value::Table(b), toml::Value::Table(o)) if !is_variant_switch(b, o) => {
+            for (k, v) in o {
+                match b.get_mut(k) {
+                    Some(bv) => merge(bv, v),
+                    None => {
+                        b.insert(k.clone(), v.clone());
+                    }
+                }
+            }
+        }
+        (b, o) => *b = o.clone(),
+    }
+}
+
+/// `value` nested under `path`.
+fn nest(path: &[String], value: &toml::Value) -> toml::Value {
+    path.iter().rev().fold(value.clone(), |v, k| {
+        let mut t = toml::Table::new();
+        t.insert(k.clone(), v);
+        toml::Value::Table(t)
+    })
+}
+
+fn value_at<'v>(base: &'v toml::Value, path: &[String]) -> Option<&'v toml::Value> {
+    path.iter().try_fold(base, |v, k| v.as_table()?.get(k))
+}
+
+/// The first override key that fails on its own (the innermost one where possible), with the
+/// deserialisation error it causes.
+fn find_culprit<M: DeserializeOwned>(
+    base: &toml::Value,
+    over: &toml::Table,
+    prefix: &mut Vec<String>,
+) -> Option<(Vec<String>, String)> {
+    for (k, v) in over {
+        prefix.push(k.clone());
+        let mut merged = base.clone();
+        merge(&mut merged, &nest(prefix, v));
+        if let Err(e) = merged.try_into::<M>() {
+            if let (toml::Value::Table(t), Some(toml::Value::Table(b))) =
+                (v, value_at(base, prefix))
+            {
+                if !is_variant_switch(b, t) {
+                    if let Some(found) = find_culprit::<M>(base, t, prefix) {
+                        return Some(found);
+                    }
+                }
+            }
+            return Some((prefix.clone(), e.message().trim_end().to_string()));
+        }
+        prefix.pop();
+    }
+    None
+}
+
+/// The path of the first key called `key` in `over`.
+fn find_key(over: &toml::Table, key: &str) -> Option<Vec<String>> {
+    for (k, v) in over {
+        if k == key {
+            return Some(vec![k.clone()]);
+        }
+        if let toml::Value::Table(t) = v {
+            if let Some(mut p) = find_key(t, key) {
+                p.insert(0, k.clone());
+                return Some(p);
+            }
+        }
+    }
+    None
+}
+
+/// The material of the entry at `at` from its `material` value.
+fn resolve_material<M: MaterialPresets>(
+    ctx: &Ctx,
+    at: &At,
+    value: &toml::Value,
+) -> std::result::Result<M, SceneError> {
+    let at = at.key("material");
+    let (preset_name, preset_at, overrides) = match value {
+        toml::Value::String(s) => (s.as_str(), at.clone(), None),
+        toml::Value::Table(t) => {
+            let mut overrides = t.clone();
+            let name = match overrides.remove("preset") {
+                None => "default",
+                Some(toml::Value::String(_)) => t["preset"].as_str().unwrap_or("default"),
+                Some(other) => {
+                    return Err(ctx.err(
+                        &at.key("preset"),
+                        format!("invalid type: {}, expected a preset name", other.type_str()),
+                    ))
+                }
+            };
+            (name, at.key("preset"), Some(overrides))
+        }
+        other => {
+            return Err(ctx.err(
+                &at,
+                format!(
+                "invalid type: {}, expected a preset name or a table {{ preset = \"...\", ... }}",
+                other.type_str()
+            ),
+            ))
+        }
+    };
+    let presets = M::presets();
+    let Some((_, preset)) = presets.into_iter().find(|(n, _)| *n == preset_name) else {
+        let names: Vec<_> = M::presets().iter().map(|(n, _)| *n).collect();
+        return Err(ctx.err(
+            &preset_at,
+            format!(
+                "unknown {} material preset '{preset_name}', expected one of {}",
+                M::KIND,
+                names.join(", ")
+            ),
+        ));
+    };
+    let Some(overrides) = overrides else {
+        return Ok(preset);
+    };
+    let base = toml::Value::try_from(&preset)
+        .map_err(|e| ctx.err(&at, format!("cannot serialise the preset: {e}")))?;
+    let mut merged = base.clone();
+    merge(&mut merged, &toml::Value::Table(overrides.clone()));
+    merged.try_into::<M>().map_err(|e| {
+        match find_culprit::<M>(&base, &overrides, &mut Vec::new()) {
+            Some((path, message)) => ctx.err(&at.keys(&path), message),
+            None => ctx.err(&at, e.message().trim_end()),
+        }
+    })
+}
+
+/// Locate a library error raised by `add_surface`/`add_volume`/`add_line`: a parameter in the
+/// material, anything else in the geometry.
+fn object_error(
+    ctx: &Ctx,
+    at: &At,
+    material: &toml::Value,
+    geometry_key: &str,
+    e: StarkError,
+) -> SceneError {
+    match &e {
+        StarkError::InvalidParameter { field, .. } => {
+            let path = material
+                .as_table()
+                .and_then(|t| find_key(t, field))
+                .unwrap_or_default();
+            ctx.stark(&at.key("material").keys(&path), e)
+        }
+        _ => ctx.stark(&at.key(geometry_key), e),
+    }
+}
+
+// ------------------------------------------------------------------------------------------
+// Geometry
+// ------------------------------------------------------------------------------------------
+
+/// Which geometry an entry gives, checking that it gives exactly one.
+fn geometry_key(
+    ctx: &Ctx,
+    at: &At,
+    generator: (&'static str, bool),
+    mesh: bool,
+    vertices: bool,
+    elements: bool,
+) -> std::result::Result<&'static str, SceneError> {
+    let mut given = Vec::new();
+    if generator.1 {
+        given.push(generator.0);
+    }
+    if mesh {
+        given.push("mesh");
+    }
+    if vertices {
+        given.push("vertices_m");
+    }
+    if vertices != elements {
+        let (has, missing) = if vertices {
+            ("vertices_m", "elements")
+        } else {
+            ("elements", "vertices_m")
+        };
+        return Err(ctx.err(
+            &at.key(has),
+            format!("`{has}` needs `{missing}` (inline geometry gives both)"),
+        ));
+    }
+    let options = if mesh || generator.0 == "grid" {
+        format!("`{}`, `mesh` or `vertices_m` + `elements`", generator.0)
+    } else {
+        format!("`{}` or `vertices_m` + `elements`", generator.0)
+    };
+    match given[..] {
+        [one] => Ok(one),
+        [] => Err(ctx.err(at, format!("no geometry: give one of {options}"))),
+        _ => Err(ctx.err(
+            &at.key(given[1]),
+            format!(
+                "more than one geometry ({}): give one of {options}",
+                given.join(", ")
+            ),
+        )),
+    }
+}
+
+/// Apply `scale`, then `rotate_deg`, then `translate_m`.
+fn place(
+    ctx: &Ctx,
+    at: &At,
+    vertices: &mut [Vector3<f64>],
+    scale: Option<f64>,
+    rotate: Option<&Rotate>,
+    translate: Option<[f64; 3]>,
+) -> std::result::Result<(), SceneError> {
+    if let Some(s) = scale {
+        if !(s > 0.0 && s.is_finite()) {
+            return Err(ctx.err(
+                &at.key("scale"),
+                format!("scale = {s} must be positive and finite"),
+            ));
+        }
+        mesh::scale(vertices, s);
+    }
+    if let Some(r) = rotate {
+        let axis = Vector3::from(r.axis);
+        if !(r.angle.is_finite() && axis.iter().all(|a| a.is_finite()) && axis.norm() > 0.0) {
+            return Err(ctx.err(
+                &at.key("rotate_deg"),
+                format!(
+                    "rotation by {} deg about {:?} needs a finite angle and a non-zero axis",
+                    r.angle, r.axis
+                ),
+            ));
+        }
+        mesh::rotate_deg(vertices, r.angle, &axis);
+    }
+    if let Some(t) = translate {
+        if !t.iter().all(|c| c.is_finite()) {
+            return Err(ctx.err(&at.key("translate_m"), "translate_m must be finite"));
+        }
+        mesh::translate(vertices, &Vector3::from(t));
+    }
+    Ok(())
+}
+
+fn check_grid(
+    ctx: &Ctx,
+    at: &At,
+    size: &[f64],
+    counts: &[usize],
+    counts_key: &str,
+) -> std::result::Result<(), SceneError> {
+    if !size.iter().all(|s| *s > 0.0 && s.is_finite()) {
+        return Err(ctx.err(
+            &at.key("size_m"),
+            format!("size_m = {size:?} must be positive and finite"),
+        ));
+    }
+    if counts.contains(&0) {
+        return Err(ctx.err(
+            &at.key(counts_key),
+            format!("{counts_key} = {counts:?} must be positive"),
+        ));
+    }
+    Ok(())
+}
+
+fn mesh_path(base_dir: &Path, file: &str) -> std::path::PathBuf {
+    base_dir.join(file)
+}
+
+fn build_surface(
+    sim: &mut Simulation,
+    ctx: &Ctx,
+    base_dir: &Path,
+    at: &At,
+    e: &SurfaceEntry,
+) -> std::result::Result<SurfaceHandle, SceneError> {
+    let material: SurfaceMaterial = resolve_material(ctx, at, &e.material)?;
+    let key = geometry_key(
+        ctx,
+        at,
+        ("grid", e.grid.is_some()),
+        e.mesh.is_some(),
+        e.vertices_m.is_some(),
+        e.elements.is_some(),
+    )?;
+    let (mut vertices, triangles) = match key {
+        "grid" => {
+            let g = e.grid.as_ref().expect("checked");
+            check_grid(ctx, &at.key("grid"), &g.size_m, &g.quads, "quads")?;
+            let m = meshes::triangle_grid([0.0, 0.0], g.size_m, g.quads, 0.0);
+            (m.vertices, m.elements)
+        }
+        "mesh" => {
+            let path = mesh_path(base_dir, e.mesh.as_deref().expect("checked"));
+            let m = load_triangle_mesh(&path)
+                .map_err(|err| ctx.err(&at.key("mesh"), err.to_string()))?;
+            (m.vertices, m.elements)
+        }
+        _ => (
+            e.vertices_m
+                .as_ref()
+                .expect("checked")
+                .iter()
+                .map(|v| Vector3::from(*v))
+                .collect(),
+            e.elements.clone().expect("checked"),
+        ),
+    };
+    place(
+        ctx,
+        at,
+        &mut vertices,
+        e.scale,
+        e.rotate_deg.as_ref(),
+        e.translate_m,
+    )?;
+    sim.add_surface(&e.name, &vertices, &triangles, &material)
+        .map_err(|err| object_error(ctx, at, &e.material, key, err))
+}
+
+fn build_volume(
+    sim: &mut Simulation,
+    ctx: &Ctx,
+    base_dir: &Path,
+    at: &At,
+    e: &VolumeEntry,
+) -> std::result::Result<VolumeHandle, SceneError> {
+    let material: VolumeMaterial = resolve_material(ctx, at, &e.material)?;
+    let key = geometry_key(
+        ctx,
+        at,
+        ("grid", e.grid.is_some()),
+        e.mesh.is_some(),
+        e.vertices_m.is_some(),
+        e.elements.is_some(),
+    )?;
+    let (mut vertices, tets) = match key {
+        "grid" => {
+            let g = e.grid.as_ref().expect("checked");
+            check_grid(ctx, &at.key("grid"), &g.size_m, &g.cells, "cells")?;
+            let m = meshes::tet_grid(Vector3::zeros(), Vector3::from(g.size_m), g.cells);
+            (m.vertices, m.elements)
+        }
+        "mesh" => {
+            let path = mesh_path(base_dir, e.mesh.as_deref().expect("checked"));
+            let m = load_tet_mesh(&path).map_err(|err| {
+                ctx.err(
+                    &at.key("mesh"),
+                    format!("{err} (a volume needs a tetrahedral mesh: .vtk or .msh)"),
+                )
+            })?;
+            (m.vertices, m.elements)
+        }
+        _ => (
+            e.vertices_m
+                .as_ref()
+                .expect("checked")
+                .iter()
+                .map(|v| Vector3::from(*v))
+                .collect(),
+            e.elements.clone().expect("checked"),
+        ),
+    };
+    place(
+        ctx,
+        at,
+        &mut vertices,
+        e.scale,
+        e.rotate_deg.as_ref(),
+        e.translate_m,
+    )?;
+    sim.add_volume(&e.name, &vertices, &tets, &material)
+        .map_err(|err| object_error(ctx, at, &e.material, key, err))
+}
+
+fn build_line(
+    sim: &mut Simulation,
+    ctx: &Ctx,
+    at: &At,
+    e: &LineEntry,
+) -> std::result::Result<LineHandle, SceneError> {
+    let material: LineMaterial = resolve_material(ctx, at, &e.material)?;
+    let key = geometry_key(
+        ctx,
+        at,
+        ("segments", e.segments.is_some()),
+        false,
+        e.vertices_m.is_some(),
+        e.elements.is_some(),
+    )?;
+    let (mut vertices, segments) = match key {
+        "segments" => {
+            let s = e.segments.as_ref().expect("checked");
+            let ends = s.begin_m.iter().chain(&s.end_m);
+            if !ends.clone().all(|c| c.is_finite()) {
+                return Err(ctx.err(&at.key("segments"), "begin_m and end_m must be finite"));
+            }
+            if s.count == 0 {
+                return Err(ctx.err(
+                    &at.keys(&["segments", "count"]),
+                    "count = 0 must be positive",
+                ));
+            }
+            let m = meshes::segment_line(Vector3::from(s.begin_m), Vector3::from(s.end_m), s.count);
+            (m.vertices, m.elements)
+        }
+        _ => (
+            e.vertices_m
+                .as_ref()
+                .expect("checked")
+                .iter()
+                .map(|v| Vector3::from(*v))
+                .collect(),
+            e.elements.clone().expect("checked"),
+        ),
+    };
+    place(
+        ctx,
+        at,
+        &mut vertices,
+        e.scale,
+        e.rotate_deg.as_ref(),
+        e.translate_m,
+    )?;
+    sim.add_line(&e.name, &vertices, &segments, &material)
+        .map_err(|err| object_error(ctx, at, &e.material, key, err))
+}
+
+// ------------------------------------------------------------------------------------------
+// Boundary conditions, attachments, events
+// ------------------------------------------------------------------------------------------
+
+fn find_object<'o>(
+    ctx: &Ctx,
+    at: &At,
+    objects: &'o [(String, SceneObject)],
+    name: &str,
+) -> std::result::Result<&'o SceneObject, SceneError> {
+    objects
+        .iter()
+        .find(|(n, _)| n == name)
+        .map(|(_, o)| o)
+        .ok_or_else(|| {
+            let names: Vec<_> = objects.iter().map(|(n, _)| n.as_str()).collect();
+            ctx.err(
+                at,
+                format!(
+                    "unknown object '{name}', expected one of {}",
+                    if names.is_empty() {
+                        "(no objects defined)".to_string()
+                    } else {
+                        names.join(", ")
+                    }
+                ),
+            )
+        })
+}
+
+/// Locate an error of a parameter group: a named parameter at its key, anything else at
+/// `fallback`.
+fn param_error(ctx: &Ctx, at: &At, fallback: &str, e: StarkError) -> SceneError {
+    match &e {
+        StarkError::InvalidParameter { field, .. } => ctx.stark(&at.key(field), e),
+        _ => ctx.stark(&at.key(fallback), e),
+    }
+}
+
+fn check_box(ctx: &Ctx, at: &At, b: &BoxSelection) -> std::result::Result<(), SceneError> {
+    if !b.center_m.iter().all(|c| c.is_finite()) {
+        return Err(ctx.err(&at.key("center_m"), "center_m must be finite"));
+    }
+    if !b.size_m.iter().all(|s| *s >= 0.0 && s.is_finite()) {
+        return Err(ctx.err(
+            &at.key("size_m"),
+            format!("size_m = {:?} must be non-negative and finite", b.size_m),
+        ));
+    }
+    Ok(())
+}
+
+fn build_prescribed(
+    sim: &mut Simulation,
+    ctx: &Ctx,
+    at: &At,
+    objects: &[(String, SceneObject)],
+    e: &PrescribedEntry,
+) -> std::result::Result<ScenePrescribed, SceneError> {
+    let set = find_object(ctx, &at.key("object"), objects, &e.object)?.nodes();
+    let defaults = PrescribedParams::default();
+    let params = PrescribedParams {
+        stiffness: e.stiffness.unwrap_or(defaults.stiffness),
+        tolerance_m: e.tolerance_m.unwrap_or(defaults.tolerance_m),
+    };
+    params
+        .validate(&e.object)
+        .map_err(|err| param_error(ctx, at, "object", err))?;
+    let mut given = Vec::new();
+    if e.inside_box.is_some() {
+        given.push("inside_box");
+    }
+    if e.outside_box.is_some() {
+        given.push("outside_box");
+    }
+    if e.nodes.is_some() {
+        given.push("nodes");
+    }
+    if e.all.is_some() {
+        given.push("all");
+    }
+    let options = "`inside_box`, `outside_box`, `nodes` or `all = true`";
+    let key = match given[..] {
+        [one] => one,
+        [] => return Err(ctx.err(at, format!("no node selection: give one of {options}"))),
+        _ => {
+            return Err(ctx.err(
+                &at.key(given[1]),
+                format!(
+                    "more than one node selection ({}): give one of {options}",
+                    given.join(", ")
+                ),
+            ))
+        }
+    };
+    let label = e.object.as_str();
+    let located = |err: StarkError| ctx.stark(&at.key(key), err);
+    let (handle, n) = match key {
+        "inside_box" | "outside_box" => {
+            let b = e
+                .inside_box
+                .as_ref()
+                .or(e.outside_box.as_ref())
+                .expect("checked");
+            check_box(ctx, &at.key(key), b)?;
+            let (center, size) = (Vector3::from(b.center_m), Vector3::from(b.size_m));
+            let (h, n) = sim
+                .deformables
+                .prescribed
+                .add_in_box(
+                    &sim.nodes,
+                    set,
+                    label,
+                    center,
+                    size,
+                    key == "inside_box",
+                    params,
+                )
+                .map_err(located)?;
+            if n == 0 {
+                let where_ = if key == "inside_box" {
+                    "inside"
+                } else {
+                    "outside"
+                };
+                return Err(ctx.err(
+                    &at.key(key),
+                    format!(
+                        "no node of '{label}' lies {where_} the box at {:?} of size {:?}",
+                        b.center_m, b.size_m
+                    ),
+                ));
+            }
+            (h, n)
+        }
+        "nodes" => {
+            let nodes = e.nodes.as_ref().expect("checked");
+            if nodes.is_empty() {
+                return Err(ctx.err(&at.key("nodes"), "the node list is empty"));
+            }
+            let h = sim
+                .deformables
+                .prescribed
+                .add(&sim.nodes, set, label, nodes, params)
+                .map_err(located)?;
+            (h, nodes.len())
+        }
+        _ => {
+            if e.all != Some(true) {
+                return Err(ctx.err(
+                    &at.key("all"),
+                    "`all = false` selects nothing: give one of `inside_box`, `outside_box`, `nodes` or `all = true`",
+                ));
+            }
+            let nodes: Vec<usize> = (0..set.len as usize).collect();
+            let h = sim
+                .deformables
+                .prescribed
+                .add(&sim.nodes, set, label, &nodes, params)
+                .map_err(located)?;
+            (h, nodes.len())
+        }
+    };
+    if let Some(motion) = &e.motion {
+        motion
+            .validate()
+            .map_err(|(field, message)| ctx.err(&at.keys(&["motion", field]), message))?;
+        let m = motion.clone();
+        sim.add_time_event(motion.start_s, f64::INFINITY, move |sim, t| {
+            m.apply(sim, handle, t)
+        });
+    }
+    Ok(ScenePrescribed {
+        object: e.object.clone(),
+        handle,
+        nodes: n,
+        motion: e.motion.clone(),
+    })
+}
+
+fn build_attachment(
+    sim: &mut Simulation,
+    ctx: &Ctx,
+    at: &At,
+    objects: &[(String, SceneObject)],
+    e: &AttachmentEntry,
+) -> std::result::Result<(String, AttachmentHandle), SceneError> {
+    let a = find_object(ctx, &at.key("a"), objects, &e.a)?.nodes();
+    let b = find_object(ctx, &at.key("b"), objects, &e.b)?.nodes();
+    let label = e.name.clone().unwrap_or_else(|| format!("{}-{}", e.a, e.b));
+    let defaults = AttachmentParams::default();
+    let params = AttachmentParams {
+        stiffness: e.stiffness.unwrap_or(defaults.stiffness),
+        tolerance_m: e.tolerance_m.unwrap_or(defaults.tolerance_m),
+    };
+    params
+        .validate(&label)
+        .map_err(|err| param_error(ctx, at, "a", err))?;
+    let attachments = &mut sim.deformables.attachments;
+    let handle = match (
+        &e.nodes_a,
+        &e.nodes_b,
+        &e.triangles_b,
+        &e.barycentric_b,
+        e.within_m,
+    ) {
+        (Some(pa), Some(pb), None, None, None) => attachments
+            .add_point_point(&label, a, pa, b, pb, params)
+            .map_err(|err| ctx.stark(&at.key("nodes_b"), err))?,
+        (Some(pa), None, Some(tb), Some(wb), None) => attachments
+            .add_point_triangle(&label, a, pa, b, tb, wb, params)
+            .map_err(|err| ctx.stark(&at.key("triangles_b"), err))?,
+        (None, None, None, None, Some(d)) => {
+            if !(d >= 0.0 && d.is_finite()) || e.a == e.b {
+                return Err(ctx.err(
+                    &at.key("within_m"),
+                    format!(
+                        "within_m = {d} needs a non-negative distance and two different objects"
+                    ),
+                ));
+            }
+            let xa = &sim.nodes.x[a.range()];
+            let xb = &sim.nodes.x[b.range()];
+            let mut pa = Vec::new();
+            let mut pb = Vec::new();
+            for (i, p) in xa.iter().enumerate() {
+                let nearest = xb
+                    .iter()
+                    .enumerate()
+                    .map(|(j, q)| (j, (p - q).norm()))
+                    .min_by(|x, y| x.1.total_cmp(&y.1));
+                if let Some((j, dist)) = nearest {
+                    if dist <= d {
+                        pa.push(i);
+                        pb.push(j);
+                    }
+                }
+            }
+            if pa.is_empty() {
+                return Err(ctx.err(
+                    &at.key("within_m"),
+                    format!(
+                        "no node of '{}' lies within {d} m of a node of '{}'",
+                        e.a, e.b
+                    ),
+                ));
+            }
+            attachments
+                .add_point_point(&label, a, &pa, b, &pb, params)
+                .map_err(|err| ctx.stark(&at.key("within_m"), err))?
+        }
+        _ => {
+            return Err(ctx.err(
+                at,
+                "give the attached nodes as `nodes_a` + `nodes_b` (point–point), `nodes_a` + \
+                 `triangles_b` + `barycentric_b` (point–triangle) or `within_m` (every node of `a` \
+                 near a node of `b`)",
+            ))
+        }
+    };
+    Ok((label, handle))
+}
+
+fn add_gravity_ramps(
+    sim: &mut Simulation,
+    ctx: &Ctx,
+    ramps: &[GravityRampEntry],
+) -> std::result::Result<(), SceneError> {
+    let mut order: Vec<usize> = (0..ramps.len()).collect();
+    order.sort_by(|&i, &j| ramps[i].start_s.total_cmp(&ramps[j].start_s));
+    for i in order {
+        let r = &ramps[i];
+        let at = At::entry("gravity_ramp", i);
+        if !(r.start_s.is_finite() && r.end_s.is_finite() && r.end_s > r.start_s) {
+            return Err(ctx.err(
+                &at.key("end_s"),
+                format!(
+                    "the ramp from {} s to {} s needs finite times with end_s > start_s",
+                    r.start_s, r.end_s
+                ),
+            ));
+        }
+        let from = Vector3::from(r.from_m_s2.unwrap_or(sim.settings.gravity_m_s2));
+        let to = Vector3::from(r.to_m_s2);
+        if !(from.iter().chain(to.iter()).all(|g| g.is_finite())) {
+            return Err(ctx.err(&at.key("to_m_s2"), "gravity must be finite"));
+        }
+        let (start, end) = (r.start_s, r.end_s);
+        sim.add_time_event(start, f64::INFINITY, move |sim, t| {
+            let s = ((t - start) / (end - start)).clamp(0.0, 1.0);
+            sim.set_gravity(from + (to - from) * s);
+            Ok(())
+        });
+    }
+    Ok(())
+}
+
+// ------------------------------------------------------------------------------------------
+// Building the simulation
+// ------------------------------------------------------------------------------------------
+
+fn build(
+    file: SceneFile,
+    ctx: &Ctx,
+    base_dir: &Path,
+    configure: impl FnOnce(&mut Settings),
+) -> std::result::Result<LoadedScene, SceneError> {
+    if !(file.duration_s > 0.0 && file.duration_s.is_finite()) {
+        return Err(ctx.err(
+            &At::default().key("duration_s"),
+            format!(
+                "duration_s = {} must be positive and finite",
+                file.duration_s
+            ),
+        ));
+    }
+    let mut settings = file.settings;
+    if settings.name == Settings::default().name {
+        let stem = Path::new(ctx.file)
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        if !stem.is_empty() {
+            settings.name = stem;
+        }
+    }
+    configure(&mut settings);
+    let name = settings.name.clone();
+    let mut sim = Simulation::new(settings).map_err(|e| {
+        let at = At::default().key("settings");
+        match &e {
+            StarkError::InvalidParameter { field, .. } => {
+                let keys: Vec<&str> = field.split('.').collect();
+                ctx.stark(&at.keys(&keys), e)
+            }
+            _ => ctx.stark(&at, e),
+        }
+    })?;
+
+    // Names are unique across surfaces, volumes and lines.
+    let names = file
+        .surface
+        .iter()
+        .map(|e| ("surface", &e.name))
+        .chain(file.volume.iter().map(|e| ("volume", &e.name)))
+        .chain(file.line.iter().map(|e| ("line", &e.name)));
+    let mut seen: Vec<(&str, usize, &String)> = Vec::new();
+    let mut counters = std::collections::HashMap::new();
+    for (kind, name) in names {
+        let i = counters.entry(kind).or_insert(0usize);
+        let at = At::entry(kind, *i).key("name");
+        if name.is_empty() {
+            return Err(ctx.err(&at, "the object name is empty"));
+        }
+        if let Some((k, j, _)) = seen.iter().find(|(_, _, n)| *n == name) {
+            return Err(ctx.err(
+                &at,
+                format!(
+                    "duplicate object name '{name}' (already used by {k} #{})",
+                    j + 1
+                ),
+            ));
+        }
+        seen.push((kind, *i, name));
+        *i += 1;
+    }
+
+    let mut objects = Vec::new();
+    for (i, e) in file.surface.iter().enumerate() {
+        let h = build_surface(&mut sim, ctx, base_dir, &At::entry("surface", i), e)?;
+        objects.push((e.name.clone(), SceneObject::Surface(h)));
+    }
+    for (i, e) in file.volume.iter().enumerate() {
+        let h = build_volume(&mut sim, ctx, base_dir, &At::entry("volume", i), e)?;
+        objects.push((e.name.clone(), SceneObject::Volume(h)));
+    }
+    for (i, e) in file.line.iter().enumerate() {
+        let h = build_line(&mut sim, ctx, &At::entry("line", i), e)?;
+        objects.push((e.name.clone(), SceneObject::Line(h)));
+    }
+    let mut prescribed = Vec::new();
+    for (i, e) in file.prescribed.iter().enumerate() {
+        let at = At::entry("prescribed", i);
+        prescribed.push(build_prescribed(&mut sim, ctx, &at, &objects, e)?);
+    }
+    let mut attachments = Vec::new();
+    for (i, e) in file.attachment.iter().enumerate() {
+        let at = At::entry("attachment", i);
+        attachments.push(build_attachment(&mut sim, ctx, &at, &objects, e)?);
+    }
+    add_gravity_ramps(&mut sim, ctx, &file.gravity_ramp)?;
+    Ok(LoadedScene {
+        simulation: sim,
+        duration_s: file.duration_s,
+        name,
+        objects,
+        prescribed,
+        attachments,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::energy::Potential;
+    use crate::io::output::OutputCells;
+    use crate::presets::objects::BendingHandle;
+    use std::path::PathBuf;
+
+    fn repo_scene(name: &str) -> PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../scenes")
+            .join(name)
+    }
+
+    /// No files written, one thread (deterministic and quiet).
+    fn quiet(s: &mut Settings) {
+        s.output.frames = false;
+        s.output.step_log = false;
+        s.threads = 1;
+    }
+
+    fn scene_error(e: StarkError) -> SceneError {
+        match e {
+            StarkError::SceneFile(e) => e,
+            other => panic!("not a scene error: {other}"),
+        }
+    }
+
+    fn parse(text: &str) -> LoadedScene {
+        parse_scene_with(text, "test.toml", Path::new("."), quiet).unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    fn parse_err(text: &str) -> SceneError {
+        match parse_scene_with(text, "test.toml", Path::new("."), quiet) {
+            Ok(_) => panic!("the scene parsed:\n{text}"),
+            Err(e) => scene_error(e),
+        }
+    }
+
+    fn bits(x: &[Vector3<f64>]) -> Vec<[u64; 3]> {
+        x.iter()
+            .map(|p| [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()])
+            .collect()
+    }
+
+    fn surface(scene: &LoadedScene, name: &str) -> SurfaceHandle {
+        match scene.object(name) {
+            Some(SceneObject::Surface(h)) => *h,
+            other => panic!("{name} is {other:?}"),
+        }
+    }
+
+    #[test]
+    fn default_scene_parses_with_the_right_counts() {
+        let scene = load_scene_with(&repo_scene("default.toml"), quiet).unwrap();
+        assert_eq!(scene.name, "default");
+        assert_eq!(scene.duration_s, 3.0);
+        let sim = &scene.simulation;
+        assert_eq!(sim.nodes.len(), 33 * 33);
+        assert_eq!(sim.deformables.triangles.num_elements(), 2 * 32 * 32);
+        match &sim.output.meshes[0].cells {
+            OutputCells::Triangles(t) => assert_eq!(t.len(), 2 * 32 * 32),
+            _ => panic!("the cloth is not a triangle mesh"),
+        }
+        // Default settings: residual 1e-6 N, dt = 1/30 s.
+        assert_eq!(sim.settings.newton.residual_tolerance_n, 1e-6);
+        assert_eq!(sim.settings.newton.step_tolerance_m_s, 0.0);
+        assert_eq!(sim.settings.time_step_s, 1.0 / 30.0);
+        // Two pinned corners at y = +0.5, k = 1e6 N/m.
+        assert_eq!(scene.prescribed.len(), 2);
+        for (p, x) in scene.prescribed.iter().zip([0.5, -0.5]) {
+            assert_eq!(p.nodes, 1);
+            let pp = &sim.deformables.prescribed;
+            assert_eq!(pp.params(p.handle).unwrap().stiffness, 1e6);
+            assert_eq!(pp.targets(p.handle).unwrap()[0], Vector3::new(x, 0.5, 0.0));
+        }
+    }
+
+    #[test]
+    fn default_scene_matches_the_builtin_hanging_cloth_bit_for_bit() {
+        let mut from_file = load_scene_with(&repo_scene("default.toml"), |s| {
+            quiet(s);
+            crate::scenes::stark_tolerances(s);
+        })
+        .unwrap()
+        .simulation;
+        let mut settings = Settings::default();
+        quiet(&mut settings);
+        let mut builtin = crate::scenes::hanging_cloth(settings).unwrap();
+        assert_eq!(from_file.settings.newton, builtin.settings.newton);
+        assert_eq!(bits(&from_file.nodes.x), bits(&builtin.nodes.x));
+        for _ in 0..3 {
+            from_file.step().unwrap();
+            builtin.step().unwrap();
+        }
+        assert!(builtin.nodes.x.iter().any(|p| p.z < -0.01), "nothing moved");
+        assert_eq!(bits(&from_file.nodes.x), bits(&builtin.nodes.x));
+    }
+
+    #[test]
+    fn box_scene_matches_the_builtin_hanging_deformable_box() {
+        let scene = load_scene_with(&repo_scene("hanging_deformable_box.toml"), quiet).unwrap();
+        let mut from_file = scene.simulation;
+        let mut settings = Settings::default();
+        quiet(&mut settings);
+        let mut builtin = crate::scenes::hanging_deformable_box(settings).unwrap();
+        // The file writes the tolerances as decimals: equal to the built-in's within rounding.
+        let (f, b) = (&from_file.settings, &builtin.settings);
+        assert_eq!(f.time_step_s, b.time_step_s);
+        assert_eq!(f.newton.step_tolerance_m_s, b.newton.step_tolerance_m_s);
+        let rel = (f.newton.residual_tolerance_n / b.newton.residual_tolerance_n - 1.0).abs();
+        assert!(rel < 1e-15, "{rel}");
+        assert_eq!((scene.duration_s * 30.0).round(), 151.0);
+        assert_eq!(from_file.nodes.len(), 2331);
+        assert_eq!(from_file.deformables.tets.num_elements(), 12000);
+        assert_eq!(bits(&from_file.nodes.x), bits(&builtin.nodes.x));
+        from_file.settings.newton = builtin.settings.newton.clone();
+        from_file.step().unwrap();
+        builtin.step().unwrap();
+        assert_eq!(bits(&from_file.nodes.x), bits(&builtin.nodes.x));
+    }
+
+    #[test]
+    fn every_repository_scene_loads() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes");
+        let mut n = 0;
+        for entry in std::fs::read_dir(dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.extension().is_some_and(|e| e == "toml" || e == "json") {
+                load_scene_with(&path, quiet).unwrap_or_else(|e| panic!("{e}"));
+                n += 1;
+            }
+        }
+        assert!(n >= 3);
+    }
+
+    #[test]
+    fn the_documented_example_loads() {
+        let doc = std::fs::read_to_string(
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/scene-format.md"),
+        )
+        .unwrap();
+        let example = doc
+            .rsplit("```toml\n")
+            .next()
+            .and_then(|s| s.split("```").next())
+            .unwrap();
+        let scene = parse_scene_with(example, "example.toml", Path::new("."), quiet)
+            .unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(scene.name, "cloth_on_a_block");
+        assert_eq!(scene.objects.len(), 3);
+        assert_eq!(scene.prescribed[0].nodes, 25);
+        assert_eq!(scene.attachments.len(), 1);
+    }
+
+    #[test]
+    fn material_overrides_change_single_fields_of_the_preset() {
+        let scene = parse(
+            r#"
+duration_s = 1.0
+[[surface]]
+name = "a"
+grid = { size_m = [1.0, 1.0], quads = [2, 2] }
+material = { preset = "cotton_fabric", strain = { youngs_modulus = 1e4 }, inertia = { density = 0.3 }, bending = { flat = { stiffness = 2e-6 } } }
+[[surface]]
+name = "b"
+grid = { size_m = [1.0, 1.0], quads = [2, 2] }
+material = { preset = "cotton_fabric", bending = "none" }
+[[surface]]
+name = "c"
+grid = { size_m = [1.0, 1.0], quads = [2, 2] }
+material.preset = "cotton_fabric"
+material.bending.dihedral = { stiffness = 1e-5 }
+[[volume]]
+name = "v"
+grid = { size_m = [1.0, 1.0, 1.0], cells = [1, 1, 1] }
+material = { preset = "soft_rubber", strain = { poissons_ratio = 0.45, strain_limit = inf } }
+[[line]]
+name = "l"
+segments = { begin_m = [0.0, 0.0, 0.0], end_m = [1.0, 0.0, 0.0], count = 4 }
+material = { preset = "elastic_rubber_band", strain = { section_radius_m = 0.003 } }
+"#,
+        );
+        let d = &scene.simulation.deformables;
+        let cotton = SurfaceMaterial::cotton_fabric();
+        let a = surface(&scene, "a");
+        let strain = d.triangles.params(a.strain).unwrap();
+        assert_eq!(strain.youngs_modulus, 1e4);
+        let expected = crate::deformables::TriangleStrainParams {
+            youngs_modulus: 1e4,
+            ..cotton.strain.clone()
+        };
+        assert_eq!(strain, &expected);
+        let inertia = d.inertia.params(a.inertia).unwrap();
+        assert_eq!((inertia.density, inertia.damping), (0.3, 0.1));
+        let Some(BendingHandle::Flat(fb)) = a.bending else {
+            panic!("a has no flat bending")
+        };
+        let fb = d.flat_bending.params(fb).unwrap();
+        assert_eq!((fb.stiffness, fb.damping), (2e-6, 1e-7));
+        assert!(surface(&scene, "b").bending.is_none());
+        let Some(BendingHandle::Dihedral(db)) = surface(&scene, "c").bending else {
+            panic!("c has no dihedral bending")
+        };
+        let db = d.dihedral_bending.params(db).unwrap();
+        assert_eq!(db.stiffness, 1e-5);
+        let Some(SceneObject::Volume(v)) = scene.object("v") else {
+            panic!()
+        };
+        let tet = d.tets.params(v.strain).unwrap();
+        assert_eq!(tet.poissons_ratio, 0.45);
+        assert_eq!(tet.strain_limit, f64::INFINITY);
+        assert_eq!(
+            tet.youngs_modulus,
+            VolumeMaterial::soft_rubber().strain.youngs_modulus
+        );
+        let Some(SceneObject::Line(l)) = scene.object("l") else {
+            panic!()
+        };
+        let seg = d.segments.params(l.strain).unwrap();
+        assert_eq!(seg.section_radius_m, 0.003);
+        assert_eq!(seg.youngs_modulus, 1e4);
+        assert_eq!(scene.simulation.nodes.len(), 3 * 9 + 9 + 5);
+    }
+
+    const CLOTH: &str = "duration_s = 1.0\n[[surface]]\nname = \"cloth\"\n\
+                         grid = { size_m = [1.0, 1.0], quads = [2, 2] }\n";
+
+    /// Each error names the file, the line (and column) and the offending field.
+    #[test]
+    fn errors_name_file_line_and_field() {
+        let cases: Vec<(&str, String, Vec<&str>)> = vec![
+            (
+                "syntax",
+                "duration_s = 1.0\n[[surface]\n".into(),
+                vec!["test.toml:2:"],
+            ),
+            (
+                "missing field",
+                "[settings]\nthreads = 1\n".into(),
+                vec!["=test.toml:1:1: missing field `duration_s`"],
+            ),
+            (
+                "unknown field in an override",
+                format!("{CLOTH}[surface.material]\npreset = \"cotton_fabric\"\nstrain = {{ youngs_modulu = 1e4 }}\n"),
+                vec![
+                    "test.toml:7:12: unknown field `youngs_modulu` in surface 'cloth' material.strain, expected one of",
+                    "`youngs_modulus`",
+                ],
+            ),
+            (
+                "unknown field in an object",
+                format!("{CLOTH}material = \"cotton_fabric\"\ncolour = \"red\"\n"),
+                vec!["test.toml:6:1: unknown field `colour` in surface 'cloth', expected one of"],
+            ),
+            (
+                "unknown top-level table",
+                format!("{CLOTH}material = \"cotton_fabric\"\n[[surfaces]]\nname = \"x\"\n"),
+                vec!["test.toml:6:", "unknown field `surfaces`"],
+            ),
+            (
+                "unknown setting",
+                "duration_s = 1.0\n[settings.newton]\nresidual_tolerance = 1e-6\n".into(),
+                vec!["test.toml:3:1: unknown field `residual_tolerance` in settings.newton"],
+            ),
+            (
+                "type error in a generator",
+                "duration_s = 1.0\n[[surface]]\nname = \"cloth\"\ngrid = { size_m = [1.0, 1.0], quads = [2, \"x\"] }\nmaterial = \"cotton_fabric\"\n".into(),
+                vec!["test.toml:4:", "in surface 'cloth' grid.quads[1]", "invalid type"],
+            ),
+            (
+                "type error in an override",
+                format!("{CLOTH}material = {{ preset = \"cotton_fabric\", strain = {{ youngs_modulus = \"soft\" }} }}\n"),
+                vec!["test.toml:5:", "invalid type: string \"soft\" in surface 'cloth' material.strain.youngs_modulus"],
+            ),
+            (
+                "unknown variant",
+                format!("{CLOTH}material = {{ preset = \"cotton_fabric\", bending = \"flatt\" }}\n"),
+                vec!["test.toml:5:", "unknown variant `flatt`", "material.bending"],
+            ),
+            (
+                "unknown preset",
+                format!("{CLOTH}material = \"soft_rubber\"\n"),
+                vec!["test.toml:5:", "unknown surface material preset 'soft_rubber'", "cotton_fabric", "surface 'cloth' material"],
+            ),
+            (
+                "bad parameter value in an override",
+                format!("{CLOTH}material = {{ preset = \"cotton_fabric\", strain = {{ youngs_modulus = -1.0 }} }}\n"),
+                vec!["test.toml:5:", "`youngs_modulus` = -1", "surface 'cloth' material.strain.youngs_modulus"],
+            ),
+            (
+                "bad setting value",
+                "duration_s = 1.0\n[settings]\ntime_step_s = -1.0\n".into(),
+                vec!["test.toml:3:1:", "`time_step_s` = -1", "settings.time_step_s"],
+            ),
+            (
+                "bad duration",
+                "duration_s = 0.0\n".into(),
+                vec!["test.toml:1:1:", "duration_s"],
+            ),
+            (
+                "duplicate names",
+                format!("{CLOTH}material = \"cotton_fabric\"\n[[volume]]\nname = \"cloth\"\ngrid = {{ size_m = [1.0, 1.0, 1.0], cells = [1, 1, 1] }}\nmaterial = \"soft_rubber\"\n"),
+                vec!["test.toml:7:1: duplicate object name 'cloth' (already used by surface #1) in volume 'cloth' name"],
+            ),
+            (
+                "no geometry",
+                "duration_s = 1.0\n[[surface]]\nname = \"cloth\"\nmaterial = \"cotton_fabric\"\n".into(),
+                vec!["test.toml:2:", "no geometry", "surface 'cloth'"],
+            ),
+            (
+                "two geometries",
+                format!("{CLOTH}mesh = \"cloth.obj\"\nmaterial = \"cotton_fabric\"\n"),
+                vec!["test.toml:5:1:", "more than one geometry (grid, mesh)", "surface 'cloth' mesh"],
+            ),
+            (
+                "bad grid",
+                "duration_s = 1.0\n[[surface]]\nname = \"cloth\"\ngrid = { size_m = [1.0, 1.0], quads = [0, 2] }\nmaterial = \"cotton_fabric\"\n".into(),
+                vec!["test.toml:4:31:", "quads = [0, 2] must be positive", "surface 'cloth' grid.quads"],
+            ),
+            (
+                "missing mesh file",
+                "duration_s = 1.0\n[[surface]]\nname = \"cloth\"\nmesh = \"no/such/cloth.obj\"\nmaterial = \"cotton_fabric\"\n".into(),
+                vec!["test.toml:4:1:", "cloth.obj' not found", "surface 'cloth' mesh"],
+            ),
+            (
+                "unknown object",
+                format!("{CLOTH}material = \"cotton_fabric\"\n[[prescribed]]\nobject = \"clth\"\nall = true\n"),
+                vec!["test.toml:7:1: unknown object 'clth' in prescribed #1 (object 'clth') object, expected one of cloth"],
+            ),
+            (
+                "empty box",
+                format!("{CLOTH}material = \"cotton_fabric\"\n[[prescribed]]\nobject = \"cloth\"\ninside_box = {{ center_m = [5.0, 0.0, 0.0], size_m = [0.1, 0.1, 0.1] }}\n"),
+                vec!["test.toml:8:1:", "no node of 'cloth' lies inside the box", "prescribed #1 (object 'cloth') inside_box"],
+            ),
+            (
+                "no selection",
+                format!("{CLOTH}material = \"cotton_fabric\"\n[[prescribed]]\nobject = \"cloth\"\n"),
+                vec!["test.toml:6:", "no node selection", "prescribed #1"],
+            ),
+            (
+                "node out of range",
+                format!("{CLOTH}material = \"cotton_fabric\"\n[[prescribed]]\nobject = \"cloth\"\nnodes = [0, 99]\n"),
+                vec!["test.toml:8:1:", "node 99 does not exist", "prescribed #1 (object 'cloth') nodes"],
+            ),
+            (
+                "bad stiffness",
+                format!("{CLOTH}material = \"cotton_fabric\"\n[[prescribed]]\nobject = \"cloth\"\nall = true\nstiffness = -5.0\n"),
+                vec!["test.toml:9:1:", "`stiffness` = -5", "prescribed #1 (object 'cloth') stiffness"],
+            ),
+            (
+                "motion without axis",
+                format!("{CLOTH}material = \"cotton_fabric\"\n[[prescribed]]\nobject = \"cloth\"\nall = true\nmotion = {{ angular_velocity_deg_s = 90.0 }}\n"),
+                vec!["test.toml:9:12:", "needs an `axis`", "prescribed #1 (object 'cloth') motion.angular_velocity_deg_s"],
+            ),
+            (
+                "unknown motion field",
+                format!("{CLOTH}material = \"cotton_fabric\"\n[[prescribed]]\nobject = \"cloth\"\nall = true\nmotion = {{ velocity = [1.0, 0.0, 0.0] }}\n"),
+                vec!["test.toml:9:12:", "unknown field `velocity` in prescribed #1 (object 'cloth') motion, expected"],
+            ),
+            (
+                "attachment to an unknown object",
+                format!("{CLOTH}material = \"cotton_fabric\"\n[[attachment]]\na = \"cloth\"\nb = \"box\"\nnodes_a = [0]\nnodes_b = [0]\n"),
+                vec!["test.toml:8:1:", "unknown object 'box'", "attachment #1 ('cloth' to 'box') b"],
+            ),
+        ];
+        let mut failures = Vec::new();
+        for (what, text, expected) in cases {
+            let e = parse_err(&text);
+            let shown = e.to_string();
+            for s in expected {
+                // A leading `=` asks for the whole message.
+                let ok = match s.strip_prefix('=') {
+                    Some(whole) => shown == whole,
+                    None => shown.contains(s),
+                };
+                if !ok {
+                    failures.push(format!("{what}: `{shown}` does not contain `{s}`"));
+                }
+            }
+            if e.file != "test.toml" || e.line.is_none() {
+                failures.push(format!("{what}: no file or line in {e:?}"));
+            }
+        }
+        assert!(failures.is_empty(), "{}", failures.join("\n"));
+    }
+
+    #[test]
+    fn json_scenes_parse_and_errors_have_lines() {
+        let json = r#"{
+  "duration_s": 1.0,
+  "settings": { "gravity_m_s2": [0.0, -9.81, 0.0] },
+  "surface": [
+    { "name": "cloth", "grid": { "size_m": [1.0, 1.0], "quads": [4, 4] },
+      "material": { "preset": "cotton_fabric", "strain": { "youngs_modulus": 1e4 } } }
+  ],
+  "prescribed": [ { "object": "cloth", "nodes": [0, 4], "stiffness": 1e6 } ]
+}"#;
+        let scene = parse_scene_with(json, "scene.json", Path::new("."), quiet).unwrap();
+        assert_eq!(scene.simulation.nodes.len(), 25);
+        assert_eq!(scene.simulation.settings.gravity_m_s2, [0.0, -9.81, 0.0]);
+        assert_eq!(scene.prescribed[0].nodes, 2);
+        let h = surface(&scene, "cloth");
+        let strain = scene
+            .simulation
+            .deformables
+            .triangles
+            .params(h.strain)
+            .unwrap();
+        assert_eq!(strain.youngs_modulus, 1e4);
+
+        let bad = json.replace("\"quads\": [4, 4]", "\"quads\": [4, 4], \"colour\": 1");
+        let e = scene_error(
+            parse_scene(&bad, "scene.json", Path::new("."))
+                .err()
+                .unwrap(),
+        );
+        assert_eq!(e.line, Some(5), "{e}");
+        assert!(e.to_string().starts_with("scene.json:5:"), "{e}");
+        assert!(e.to_string().contains("unknown field `colour`"), "{e}");
+        let bad = json.replace("\"youngs_modulus\": 1e4", "\"youngs_modulu\": 1e4");
+        let e = scene_error(
+            parse_scene(&bad, "scene.json", Path::new("."))
+                .err()
+                .unwrap(),
+        );
+        assert!(
+            e.to_string()
+                .contains("unknown field `youngs_modulu` in surface 'cloth' material.strain"),
+            "{e}"
+        );
+        let e = scene_error(
+            parse_scene("{ \"duration_s\": 1.0,\n ]", "scene.json", Path::new("."))
+                .err()
+                .unwrap(),
+        );
+        assert_eq!(e.line, Some(2), "{e}");
+    }
+
+    #[test]
+    fn motions_move_the_targets() {
+        let mut scene = parse(
+            r#"
+duration_s = 2.0
+[settings]
+gravity_m_s2 = [0.0, 0.0, 0.0]
+[[surface]]
+name = "cloth"
+grid = { size_m = [0.5, 0.5], quads = [4, 4] }
+rotate_deg = { angle = 90.0, axis = [1.0, 0.0, 0.0] }
+material = "cotton_fabric"
+[[prescribed]]
+object = "cloth"
+inside_box = { center_m = [0.25, 0.0, 0.0], size_m = [0.001, 1.0, 1.0] }
+stiffness = 1e6
+motion = { start_s = 0.5, end_s = 1.5, angular_velocity_deg_s = 90.0, axis = [2.0, 0.0, 0.0], center_m = [0.0, 0.0, 0.1], velocity_m_s = [0.0, 0.0, 0.2] }
+[[prescribed]]
+object = "cloth"
+inside_box = { center_m = [-0.25, 0.0, 0.0], size_m = [0.001, 1.0, 1.0] }
+stiffness = 1e6
+motion = { velocity_m_s = [0.0, 0.3, 0.0] }
+"#,
+        );
+        let twist = scene.prescribed[0].clone();
+        let slide = scene.prescribed[1].clone();
+        assert_eq!((twist.nodes, slide.nodes), (5, 5));
+        let sim = &mut scene.simulation;
+        let reference: Vec<_> = sim
+            .deformables
+            .prescribed
+            .targets(twist.handle)
+            .unwrap()
+            .to_vec();
+        // The grid was turned into the XZ plane.
+        assert!(reference.iter().all(|p| p.x == 0.25 && p.y.abs() < 1e-15));
+        let motion = twist.motion.clone().unwrap();
+        for (t, tau) in [
+            (0.0, 0.0),
+            (0.5, 0.0),
+            (1.0, 0.5),
+            (1.25, 0.75),
+            (1.5, 1.0),
+            (3.0, 1.0),
+        ] {
+            motion.apply(sim, twist.handle, t).unwrap();
+            let (s, c) = (90.0f64 * tau).to_radians().sin_cos();
+            let targets = sim.deformables.prescribed.targets(twist.handle).unwrap();
+            for (p, q) in reference.iter().zip(targets) {
+                let (y, z) = (p.y, p.z - 0.1);
+                let expected = Vector3::new(p.x, c * y - s * z, s * y + c * z + 0.1 + 0.2 * tau);
+                assert!((q - expected).norm() < 1e-12, "t = {t}: {q} vs {expected}");
+            }
+        }
+        // Through the event: after one step the sliding edge's targets are at t = dt.
+        let slide_ref: Vec<_> = sim
+            .deformables
+            .prescribed
+            .targets(slide.handle)
+            .unwrap()
+            .to_vec();
+        sim.step().unwrap();
+        let t = sim.time();
+        assert!(t > 0.0);
+        let targets = sim.deformables.prescribed.targets(slide.handle).unwrap();
+        for (p, q) in slide_ref.iter().zip(targets) {
+            assert!((q - (p + Vector3::new(0.0, 0.3 * t, 0.0))).norm() < 1e-14);
+        }
+    }
+
+    #[test]
+    fn twisting_cloth_scene_follows_its_motions() {
+        let mut scene =
+            load_scene_with(&repo_scene("twisting_cloth_no_contact.toml"), quiet).unwrap();
+        assert_eq!(scene.simulation.gravity(), Vector3::zeros());
+        assert_eq!(scene.duration_s, 2.0);
+        let edges: Vec<_> = scene
+            .prescribed
+            .iter()
+            .map(|p| (p.handle, p.nodes))
+            .collect();
+        assert_eq!(edges.iter().map(|e| e.1).collect::<Vec<_>>(), vec![33, 33]);
+        let sim = &mut scene.simulation;
+        for _ in 0..3 {
+            sim.step().unwrap();
+        }
+        let t = sim.time();
+        for ((h, _), sign) in edges.iter().zip([1.0, -1.0]) {
+            let pp = &sim.deformables.prescribed;
+            assert!(pp.max_violation_m(*h, &sim.nodes.x).unwrap() <= 1e-3);
+            // The edge node at the top (z = +0.25 before the motion) turned by ±90°/s · t.
+            let (s, c) = (sign * 90.0f64 * t).to_radians().sin_cos();
+            let top = pp
+                .targets(*h)
+                .unwrap()
+                .iter()
+                .map(|p| (p - Vector3::new(p.x, -0.25 * s, 0.25 * c)).norm())
+                .fold(f64::INFINITY, f64::min);
+            assert!(top < 1e-12, "{top}");
+        }
+    }
+
+    #[test]
+    fn mesh_paths_are_relative_to_the_scene_file() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::create_dir_all(dir.path().join("meshes")).unwrap();
+        std::fs::create_dir_all(dir.path().join("scenes")).unwrap();
+        std::fs::write(
+            dir.path().join("meshes/square.obj"),
+            "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n",
+        )
+        .unwrap();
+        std::fs::write(
+            dir.path().join("meshes/tet.vtk"),
+            "# vtk DataFile Version 2.0\ntet\nASCII\nDATASET UNSTRUCTURED_GRID\n\
+             POINTS 4 double\n0 0 0\n1 0 0\n0 1 0\n0 0 1\nCELLS 1 5\n4 0 1 2 3\n\
+             CELL_TYPES 1\n10\n",
+        )
+        .unwrap();
+        let scene_path = dir.path().join("scenes/meshes.toml");
+        std::fs::write(
+            &scene_path,
+            r#"duration_s = 1.0
+[[surface]]
+name = "square"
+mesh = "../meshes/square.obj"
+scale = 2.0
+translate_m = [0.0, 0.0, 1.0]
+material = "cotton_fabric"
+[[volume]]
+name = "tet"
+mesh = "../meshes/tet.vtk"
+material = "soft_rubber"
+"#,
+        )
+        .unwrap();
+        let scene = load_scene_with(&scene_path, quiet).unwrap();
+        let sim = &scene.simulation;
+        let square = surface(&scene, "square");
+        let x = sim.positions(square.nodes);
+        assert_eq!(x.len(), 4);
+        assert_eq!(x[2], Vector3::new(2.0, 2.0, 1.0));
+        assert_eq!(sim.deformables.triangles.num_elements(), 2);
+        assert_eq!(sim.deformables.tets.num_elements(), 1);
+        assert_eq!(scene.name, "meshes");
+
+        // A volume needs tets; a missing file names the resolved path and the line.
+        let text = std::fs::read_to_string(&scene_path)
+            .unwrap()
+            .replace("../meshes/tet.vtk", "../meshes/square.obj");
+        std::fs::write(&scene_path, text).unwrap();
+        let e = scene_error(load_scene(&scene_path).err().unwrap()).to_string();
+        assert!(e.contains("meshes.toml:10:1:"), "{e}");
+        assert!(e.contains("contains no tetrahedra"), "{e}");
+        assert!(e.contains("volume 'tet' mesh"), "{e}");
+        let text = std::fs::read_to_string(&scene_path)
+            .unwrap()
+            .replace("../meshes/square.obj\"\nscale", "square.obj\"\nscale");
+        std::fs::write(&scene_path, text).unwrap();
+        let e = scene_error(load_scene(&scene_path).err().unwrap()).to_string();
+        assert!(e.contains("meshes.toml:4:1:"), "{e}");
+        assert!(e.contains("scenes/square.obj' not found"), "{e}");
+    }
+
+    #[test]
+    fn attachments_and_gravity_ramps() {
+        let mut scene = parse(
+            r#"
+duration_s = 1.0
+[[surface]]
+name = "a"
+grid = { size_m = [1.0, 1.0], quads = [2, 2] }
+material = "cotton_fabric"
+[[surface]]
+name = "b"
+grid = { size_m = [1.0, 1.0], quads = [2, 2] }
+translate_m = [0.0, 0.0, 0.5]
+material = "cotton_fabric"
+[[line]]
+name = "rope"
+vertices_m = [[0.5, 0.5, 0.0], [0.5, 0.5, -0.5]]
+elements = [[0, 1]]
+material = "elastic_rubber_band"
+[[attachment]]
+a = "a"
+b = "b"
+nodes_a = [0, 8]
+nodes_b = [0, 8]
+stiffness = 1e5
+[[attachment]]
+name = "knot"
+a = "rope"
+b = "a"
+within_m = 1e-9
+[[attachment]]
+a = "rope"
+b = "b"
+nodes_a = [1]
+triangles_b = [[0, 1, 2]]
+barycentric_b = [[0.2, 0.3, 0.5]]
+[[gravity_ramp]]
+start_s = 0.0
+end_s = 1.0
+to_m_s2 = [0.0, 0.0, -1.0]
+"#,
+        );
+        let labels: Vec<_> = scene.attachments.iter().map(|(l, _)| l.as_str()).collect();
+        assert_eq!(labels, ["a-b", "knot", "rope-b"]);
+        let sim = &mut scene.simulation;
+        let knot = scene.attachments[1].1;
+        // The rope's top node coincides with the cloth's corner (0.5, 0.5, 0).
+        let gap = sim
+            .deformables
+            .attachments
+            .max_gap_m(knot, &sim.nodes.x)
+            .unwrap();
+        assert_eq!(gap, 0.0);
+        sim.step().unwrap();
+        let t = sim.time();
+        let expected = -9.81 + (9.81 - 1.0) * t;
+        assert!((sim.gravity().z - expected).abs() < 1e-12);
+    }
+}
