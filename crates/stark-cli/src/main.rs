@@ -148,10 +148,12 @@ fn run(
     let settings = base_settings(out.clone(), threads, frames);
     let (mut sim, scene_duration) = match (scene_file, scene) {
         (Some(path), _) => {
-            return Err(stark::StarkError::Scene(format!(
-                "{}: scene files are not supported yet",
-                path.display()
-            )));
+            let loaded = stark::io::scene::load_scene_with(&path, |s| {
+                s.output.directory = out.clone();
+                s.threads = threads;
+                s.output.frames &= frames;
+            })?;
+            (loaded.simulation, loaded.duration_s)
         }
         (None, name) => {
             let scene = find_scene(name.as_deref().unwrap_or("default"))?;
