@@ -1,10 +1,12 @@
-//! Assembly of the global gradient and block-sparse Hessian from element outputs.
+//! Assembly of the global gradient and block-sparse Hessian from element contributions.
 //!
-//! Terms write every element's value, gradient and Hessian blocks into one flat buffer (in
-//! parallel, each element its own slice). The global matrix is then *gathered*: each stored block
-//! knows the buffer positions of its contributions, so rows are summed in parallel without
-//! conflicts and in a fixed order (deterministic for any thread count). The pattern and gather
-//! lists are rebuilt only when a term's topology changes.
+//! Chunks of consecutive elements are coloured so that no two chunks of one colour share a DOF
+//! block. Each colour is
+//! evaluated in parallel and every element adds its gradient and Hessian blocks straight into the
+//! global arrays: within a colour the writes are disjoint, and across colours the order is fixed,
+//! so every entry is summed in the same order whatever the thread count (deterministic results).
+//! Only the upper block triangle is accumulated; the lower one is its transpose. The pattern,
+//! slot maps and colours are rebuilt only when a term's topology changes.
 
 use super::term::{element_stride, EnergyTerm, EvalMode, NO_DOF};
 use crate::solver::linear::BlockSparseMatrix;
@@ -17,27 +19,70 @@ static NEXT_PATTERN_ID: AtomicU64 = AtomicU64::new(1);
 /// Identity of the current layout: per term (version, elements, width), and the block count.
 type LayoutKey = (Vec<(u64, usize, usize)>, usize);
 
-/// Cached layout and scratch of the assembly.
+/// No matrix slot (padding, or a block of the lower triangle).
+const NO_SLOT: u32 = u32::MAX;
+
+/// Colours of a greedy colouring; chunks that would need more go to a serial group.
+const MAX_COLORS: usize = 64;
+
+/// Consecutive elements coloured together: evaluated in order on one thread (elements of a mesh
+/// numbered in order are mostly neighbours, so their data stays in cache).
+const CHUNK: usize = 128;
+
+/// Layout of one term.
+#[derive(Default)]
+struct TermLayout {
+    width: usize,
+    /// DOF blocks of each element (`width` each).
+    stencils: Vec<u32>,
+    /// Matrix slot of each element block `(a, b)` that lies in the upper triangle (`width²`).
+    slots: Vec<u32>,
+    /// Element ranges (chunks) per colour.
+    colors: Vec<Vec<(u32, u32)>>,
+    /// Chunks that did not fit in [`MAX_COLORS`] colours, evaluated serially.
+    serial: Vec<(u32, u32)>,
+    /// Energy of each element at the last evaluation.
+    energies: Vec<f64>,
+}
+
+/// A pointer that may be shared between threads that write disjoint entries.
+#[derive(Clone, Copy)]
+struct Shared<T>(*mut T);
+// SAFETY: only used for writes to disjoint indices, guaranteed by the colouring (see `assemble`).
+unsafe impl<T> Send for Shared<T> {}
+unsafe impl<T> Sync for Shared<T> {}
+
+impl<T> Shared<T> {
+    /// The pointer (a method, so closures capture the whole `Shared`, which is `Sync`).
+    fn ptr(self) -> *mut T {
+        self.0
+    }
+}
+
+/// Cached layout of the assembly.
 #[derive(Default)]
 pub struct Assembler {
     key: Option<LayoutKey>,
-    term_base: Vec<usize>,
-    buffer: Vec<f64>,
-    grad_ptr: Vec<usize>,
-    grad_src: Vec<usize>,
-    hess_ptr: Vec<usize>,
-    hess_src: Vec<usize>,
-    /// For every stored block: `None` for the upper triangle (gathered), or the upper-triangle
-    /// block it is the transpose of.
+    layouts: Vec<TermLayout>,
+    /// For every stored block: `None` for the upper triangle (accumulated), or the upper block
+    /// it is the transpose of.
     mirror: Vec<Option<u32>>,
     /// The assembled Hessian (pattern and values).
     pub matrix: BlockSparseMatrix,
     /// Identifies the sparsity pattern of `matrix`; unchanged while the pattern is unchanged.
     pub pattern_id: u64,
-    /// Number of pattern rebuilds (for logs).
+    /// Number of layout rebuilds (for logs).
     pub rebuilds: usize,
-    /// Wall time in element evaluation and in gathering, s.
+    /// Wall time in evaluation (with accumulation) and in completing the matrix, s.
     pub timing: (f64, f64),
+}
+
+fn slot_of(matrix: &BlockSparseMatrix, r: u32, c: u32) -> u32 {
+    let row = matrix.row_start[r as usize]..matrix.row_start[r as usize + 1];
+    let k = matrix.cols[row.clone()]
+        .binary_search(&c)
+        .expect("block in pattern");
+    (row.start + k) as u32
 }
 
 impl Assembler {
@@ -52,95 +97,76 @@ impl Assembler {
         if self.key.as_ref() == Some(&key) {
             return;
         }
-        // Buffer layout and stencils.
-        self.term_base.clear();
-        let mut total = 0usize;
-        let mut stencils: Vec<Vec<u32>> = Vec::with_capacity(terms.len());
+        // Stencils and the block pattern.
+        let mut pairs: Vec<(u32, u32)> = (0..n_blocks as u32).map(|b| (b, b)).collect();
+        self.layouts.clear();
         for t in terms {
-            self.term_base.push(total);
             let m = t.stencil_width();
-            total += t.num_elements() * element_stride(m);
-            let mut s = vec![NO_DOF; t.num_elements() * m];
-            t.write_stencils(state, &mut s);
-            stencils.push(s);
-        }
-        self.buffer.resize(total, 0.0);
-
-        // (row, col, source) for every Hessian block; (block, source) for every gradient part.
-        let mut hess: Vec<(u32, u32, usize)> = Vec::new();
-        let mut grad: Vec<(u32, usize)> = Vec::new();
-        for (k, t) in terms.iter().enumerate() {
-            let m = t.stencil_width();
-            let stride = element_stride(m);
-            for (e, st) in stencils[k]
-                .chunks_exact(m.max(1))
-                .enumerate()
-                .take(t.num_elements())
-            {
-                let base = self.term_base[k] + e * stride;
-                for a in 0..m {
-                    if st[a] == NO_DOF {
-                        continue;
-                    }
-                    grad.push((st[a], base + 1 + 3 * a));
-                    for b in 0..m {
-                        if st[b] == NO_DOF {
-                            continue;
-                        }
-                        // Only the upper triangle is gathered; the lower one is its transpose.
-                        let src = if st[a] <= st[b] {
-                            base + 1 + 3 * m + 9 * (a * m + b)
-                        } else {
-                            usize::MAX
-                        };
-                        hess.push((st[a], st[b], src));
+            let mut stencils = vec![NO_DOF; t.num_elements() * m];
+            t.write_stencils(state, &mut stencils);
+            for st in stencils.chunks_exact(m.max(1)) {
+                for &r in st.iter().filter(|&&r| r != NO_DOF) {
+                    for &c in st.iter().filter(|&&c| c != NO_DOF) {
+                        pairs.push((r, c));
                     }
                 }
             }
+            self.layouts.push(TermLayout {
+                width: m,
+                stencils,
+                ..Default::default()
+            });
         }
-        // Every row gets a diagonal block, even without contributions.
-        for b in 0..n_blocks as u32 {
-            hess.push((b, b, usize::MAX));
-        }
-        hess.par_sort_unstable();
-        grad.par_sort_unstable();
-
-        let mut pairs: Vec<(u32, u32)> = Vec::new();
-        self.hess_ptr.clear();
-        self.hess_src.clear();
-        for &(r, c, src) in &hess {
-            if pairs.last() != Some(&(r, c)) {
-                pairs.push((r, c));
-                self.hess_ptr.push(self.hess_src.len());
-            }
-            if src != usize::MAX {
-                self.hess_src.push(src);
-            }
-        }
-        self.hess_ptr.push(self.hess_src.len());
-
-        self.grad_ptr = vec![0; n_blocks + 1];
-        for &(b, _) in &grad {
-            self.grad_ptr[b as usize + 1] += 1;
-        }
-        for i in 0..n_blocks {
-            self.grad_ptr[i + 1] += self.grad_ptr[i];
-        }
-        self.grad_src = grad.iter().map(|&(_, s)| s).collect();
-
+        pairs.par_sort_unstable();
+        pairs.dedup();
         let matrix = BlockSparseMatrix::from_sorted_pairs(n_blocks, &pairs);
+
+        // Slot maps and colours.
+        for (layout, t) in self.layouts.iter_mut().zip(terms) {
+            let m = layout.width;
+            let n = t.num_elements();
+            layout.slots = vec![NO_SLOT; n * m * m];
+            layout.energies = vec![0.0; n];
+            let mut used = vec![0u64; n_blocks];
+            let mut colors: Vec<Vec<(u32, u32)>> = Vec::new();
+            layout.serial.clear();
+            for e in 0..n {
+                let st = &layout.stencils[e * m..(e + 1) * m];
+                for a in 0..m {
+                    for b in 0..m {
+                        if st[a] != NO_DOF && st[b] != NO_DOF && st[a] <= st[b] {
+                            layout.slots[(e * m + a) * m + b] = slot_of(&matrix, st[a], st[b]);
+                        }
+                    }
+                }
+            }
+            for start in (0..n).step_by(CHUNK) {
+                let end = (start + CHUNK).min(n);
+                let blocks = layout.stencils[start * m..end * m]
+                    .iter()
+                    .filter(|&&r| r != NO_DOF);
+                let mask = blocks.clone().fold(0u64, |acc, &r| acc | used[r as usize]);
+                let color = mask.trailing_ones() as usize;
+                let range = (start as u32, end as u32);
+                if color >= MAX_COLORS {
+                    layout.serial.push(range);
+                    continue;
+                }
+                if colors.len() <= color {
+                    colors.resize(color + 1, Vec::new());
+                }
+                colors[color].push(range);
+                for &r in blocks {
+                    used[r as usize] |= 1 << color;
+                }
+            }
+            layout.colors = colors;
+        }
         self.mirror = pairs
             .iter()
-            .map(|&(r, c)| {
-                (r > c).then(|| {
-                    let row = matrix.row_start[c as usize]..matrix.row_start[c as usize + 1];
-                    let k = matrix.cols[row.clone()]
-                        .binary_search(&r)
-                        .expect("symmetric pattern");
-                    (row.start + k) as u32
-                })
-            })
+            .map(|&(r, c)| (r > c).then(|| slot_of(&matrix, c, r)))
             .collect();
+
         let same_pattern =
             matrix.row_start == self.matrix.row_start && matrix.cols == self.matrix.cols;
         if !same_pattern || self.pattern_id == 0 {
@@ -164,65 +190,75 @@ impl Assembler {
     ) -> (f64, f64) {
         self.ensure_layout(terms, state, n_blocks);
         let t0 = std::time::Instant::now();
-        let mut energy = 0.0;
-        let mut scale = 0.0;
-        for (k, t) in terms.iter().enumerate() {
-            let len = t.num_elements() * element_stride(t.stencil_width());
-            let base = self.term_base[k];
-            let out = &mut self.buffer[base..base + len];
-            t.evaluate(state, mode, out);
-            let stride = element_stride(t.stencil_width());
-            for e in out.iter().step_by(stride) {
+        gradient.iter_mut().for_each(|g| *g = 0.0);
+        self.matrix.values.iter_mut().for_each(|v| *v = [0.0; 9]);
+        let grad_ptr = Shared(gradient.as_mut_ptr());
+        let values_ptr = Shared(self.matrix.values.as_mut_ptr());
+        let (mut energy, mut scale) = (0.0, 0.0);
+        for (layout, term) in self.layouts.iter_mut().zip(terms) {
+            let m = layout.width;
+            let stride = element_stride(m);
+            let energies_ptr = Shared(layout.energies.as_mut_ptr());
+            let (stencils, slots) = (&layout.stencils, &layout.slots);
+            let add = |e: usize, out: &[f64]| {
+                let st = &stencils[e * m..(e + 1) * m];
+                // SAFETY: elements of one colour share no DOF block, so they write disjoint
+                // gradient entries and disjoint matrix blocks (a block's slot is determined by
+                // its two DOF blocks); energies are indexed by the element. Colours run one
+                // after the other. The serial group runs on one thread.
+                unsafe {
+                    *energies_ptr.ptr().add(e) = out[0];
+                    for a in 0..m {
+                        if st[a] == NO_DOF {
+                            continue;
+                        }
+                        let g = grad_ptr.ptr().add(3 * st[a] as usize);
+                        for i in 0..3 {
+                            *g.add(i) += out[1 + 3 * a + i];
+                        }
+                        for b in 0..m {
+                            let slot = slots[(e * m + a) * m + b];
+                            if slot == NO_SLOT {
+                                continue;
+                            }
+                            let blk = &mut *values_ptr.ptr().add(slot as usize);
+                            let src = &out[1 + 3 * m + 9 * (a * m + b)..][..9];
+                            for k in 0..9 {
+                                blk[k] += src[k];
+                            }
+                        }
+                    }
+                }
+            };
+            for color in &layout.colors {
+                color.par_iter().for_each_init(
+                    || vec![0.0; stride],
+                    |buf, &(start, end)| {
+                        for e in start as usize..end as usize {
+                            term.evaluate_element(e, state, mode, buf);
+                            add(e, buf);
+                        }
+                    },
+                );
+            }
+            let mut buf = vec![0.0; stride];
+            for &(start, end) in &layout.serial {
+                for e in start as usize..end as usize {
+                    term.evaluate_element(e, state, mode, &mut buf);
+                    add(e, &buf);
+                }
+            }
+            for &e in &layout.energies {
                 energy += e;
                 scale += e.abs();
             }
         }
         let t1 = std::time::Instant::now();
         self.timing.0 += (t1 - t0).as_secs_f64();
-        let buffer = &self.buffer;
-        let (gp, gs) = (&self.grad_ptr, &self.grad_src);
-        const BLOCKS_PER_TASK: usize = 1024;
-        gradient
-            .par_chunks_mut(3 * BLOCKS_PER_TASK)
-            .enumerate()
-            .for_each(|(chunk, gs_out)| {
-                for (k, g) in gs_out.chunks_exact_mut(3).enumerate() {
-                    let b = chunk * BLOCKS_PER_TASK + k;
-                    let mut acc = [0.0; 3];
-                    for &src in &gs[gp[b]..gp[b + 1]] {
-                        acc[0] += buffer[src];
-                        acc[1] += buffer[src + 1];
-                        acc[2] += buffer[src + 2];
-                    }
-                    g.copy_from_slice(&acc);
-                }
-            });
-        let (hp, hs) = (&self.hess_ptr, &self.hess_src);
-        const SLOTS_PER_TASK: usize = 512;
-        let mirror = &self.mirror;
-        self.matrix
-            .values
-            .par_chunks_mut(SLOTS_PER_TASK)
-            .enumerate()
-            .for_each(|(chunk, values)| {
-                for (k, v) in values.iter_mut().enumerate() {
-                    let slot = chunk * SLOTS_PER_TASK + k;
-                    if mirror[slot].is_some() {
-                        continue;
-                    }
-                    let mut acc = [0.0; 9];
-                    for &src in &hs[hp[slot]..hp[slot + 1]] {
-                        for (a, b) in acc.iter_mut().zip(&buffer[src..src + 9]) {
-                            *a += b;
-                        }
-                    }
-                    *v = acc;
-                }
-            });
         // Lower triangle: transposes of the upper blocks.
         let values = &mut self.matrix.values;
-        for slot in 0..values.len() {
-            if let Some(upper) = mirror[slot] {
+        for (slot, mirror) in self.mirror.iter().enumerate() {
+            if let Some(upper) = *mirror {
                 let u = values[upper as usize];
                 values[slot] = [u[0], u[3], u[6], u[1], u[4], u[7], u[2], u[5], u[8]];
             }

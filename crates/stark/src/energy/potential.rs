@@ -11,7 +11,7 @@ use super::dual::HyperDual;
 use super::psd::project_psd;
 use super::scalar::Scalar;
 use super::tensor::Vec3;
-use super::term::{element_stride, EnergyTerm, EvalMode, StepCheck};
+use super::term::{EnergyTerm, EvalMode, StepCheck};
 use crate::state::EvalState;
 use nalgebra::Vector3;
 use rayon::prelude::*;
@@ -238,46 +238,39 @@ impl<P: Potential<N>, const N: usize> EnergyTerm for PotentialTerm<P, N> {
             self.potential.energy(e, &x, &stencil)
         })
     }
-    fn evaluate(&self, state: &EvalState, mode: EvalMode, out: &mut [f64]) {
-        let stride = element_stride(N);
+    fn evaluate_element(&self, e: usize, state: &EvalState, mode: EvalMode, o: &mut [f64]) {
         let dt = state.dt;
         let n = 3 * N;
-        let convex = self.potential.is_convex();
-        let project = mode == EvalMode::ProjectedHessian && !convex;
-        // Scratch reused across the elements of a task (a fast path overwrites all of it).
-        out.par_chunks_mut(stride).enumerate().for_each_init(
-            || Box::new(HyperDual::<N>::constant(0.0)),
-            |d, (e, o)| {
-                let stencil = Stencil::new(self.potential.nodes(e), state);
-                let projected = element_derivatives(&self.potential, e, &stencil, project, d);
-                // Deformable map: ∂x/∂v = dt·I, so ∇ᵥ = dt ∇ₓ and Hᵥ = dt² Hₓ (projection commutes
-                // with the positive scaling).
-                let h = d
-                    .hess
-                    .as_flattened_mut()
-                    .as_flattened_mut()
-                    .as_flattened_mut();
-                if project && !projected {
-                    project_psd(h, n);
-                }
-                o[0] = d.value;
-                for (k, g) in d.grad.as_flattened().iter().enumerate() {
-                    o[1 + k] = dt * g;
-                }
-                let dt2 = dt * dt;
-                let base = 1 + 3 * N;
-                for a in 0..N {
-                    for b in 0..N {
-                        let blk = &mut o[base + 9 * (a * N + b)..base + 9 * (a * N + b) + 9];
-                        for i in 0..3 {
-                            for j in 0..3 {
-                                blk[3 * i + j] = dt2 * h[(3 * a + i) * n + 3 * b + j];
-                            }
-                        }
+        let project = mode == EvalMode::ProjectedHessian && !self.potential.is_convex();
+        let stencil = Stencil::new(self.potential.nodes(e), state);
+        let mut d = HyperDual::<N>::constant(0.0);
+        let projected = element_derivatives(&self.potential, e, &stencil, project, &mut d);
+        // Deformable map: ∂x/∂v = dt·I, so ∇ᵥ = dt ∇ₓ and Hᵥ = dt² Hₓ (projection commutes with
+        // the positive scaling).
+        let h = d
+            .hess
+            .as_flattened_mut()
+            .as_flattened_mut()
+            .as_flattened_mut();
+        if project && !projected {
+            project_psd(h, n);
+        }
+        o[0] = d.value;
+        for (k, g) in d.grad.as_flattened().iter().enumerate() {
+            o[1 + k] = dt * g;
+        }
+        let dt2 = dt * dt;
+        let base = 1 + 3 * N;
+        for a in 0..N {
+            for b in 0..N {
+                let blk = &mut o[base + 9 * (a * N + b)..base + 9 * (a * N + b) + 9];
+                for i in 0..3 {
+                    for j in 0..3 {
+                        blk[3 * i + j] = dt2 * h[(3 * a + i) * n + 3 * b + j];
                     }
                 }
-            },
-        );
+            }
+        }
     }
     fn before_step(&mut self, state: &EvalState) {
         self.potential.before_step(state)

@@ -59,8 +59,10 @@ pub trait EnergyTerm: Send + Sync {
     /// Total energy at `state`.
     fn energy(&self, state: &EvalState) -> f64;
 
-    /// Per-element value, gradient and Hessian in DOF space, in the layout of [`element_stride`].
-    fn evaluate(&self, state: &EvalState, mode: EvalMode, out: &mut [f64]);
+    /// Value, gradient and Hessian of element `e` in DOF space, in the layout of
+    /// [`element_stride`] (`out` has that length). Called in parallel for elements that share no
+    /// DOF block.
+    fn evaluate_element(&self, e: usize, state: &EvalState, mode: EvalMode, out: &mut [f64]);
 
     /// Called once before each time step (lagged quantities, e.g. friction, are set here).
     fn before_step(&mut self, _state: &EvalState) {}

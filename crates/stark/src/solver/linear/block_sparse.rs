@@ -7,7 +7,7 @@
 use rayon::prelude::*;
 
 /// Rows handled per parallel task: fixed, so that results do not depend on the thread count.
-pub const ROWS_PER_TASK: usize = 256;
+pub const ROWS_PER_TASK: usize = 512;
 
 /// A 3×3 block, row-major.
 pub type Block = [f64; 9];
