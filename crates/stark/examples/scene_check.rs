@@ -16,6 +16,9 @@ fn main() {
     settings.output.frames = false;
     settings.output.directory = "/tmp/stark_out".into();
     let mut sim = (scene.build)(settings).unwrap();
+    if std::env::var("STARK_CHOLESKY").is_ok() {
+        sim.settings.newton.linear_solver = stark::solver::LinearSolver::Cholesky;
+    }
     if let Some(eta) = std::env::args().nth(3) {
         sim.settings.newton.cg_relative_tolerance = eta.parse().unwrap();
     }
