@@ -7,7 +7,7 @@
 use super::{Groups, NodeSetHandle};
 use crate::energy::symbolic::KernelSpec;
 use crate::energy::{
-    flat_from_points, points_from_flat, EnergyTerm, FastDerivatives, HyperDual, Node, Potential,
+    points_from_flat, run_kernel, EnergyTerm, FastDerivatives, HyperDual, Kernel, Node, Potential,
     PotentialTerm, Scalar, Stencil, StepCheck, Vec3,
 };
 use crate::error::{check_param, Result, StarkError};
@@ -184,22 +184,13 @@ impl<const N: usize> Potential<N> for AttachmentSet<N> {
         _project: bool,
         out: &mut HyperDual<N>,
     ) -> FastDerivatives {
-        let p = self.kernel_params(e);
-        let mut x = [0.0; 12];
-        flat_from_points(&stencil.x, &mut x);
-        let grad = out.grad.as_flattened_mut();
-        let hess = out
-            .hess
-            .as_flattened_mut()
-            .as_flattened_mut()
-            .as_flattened_mut();
-        out.value = match N {
-            2 => generated::attachment_point_point(&x[..6], &p, grad, hess),
-            3 => generated::attachment_point_edge(&x[..9], &p, grad, hess),
-            4 => generated::attachment_point_triangle(&x[..12], &p, grad, hess),
+        let kernel: Kernel = match N {
+            2 => generated::attachment_point_point,
+            3 => generated::attachment_point_edge,
+            4 => generated::attachment_point_triangle,
             _ => return FastDerivatives::Unavailable,
         };
-        FastDerivatives::Exact
+        run_kernel(kernel, &stencil.x, &self.kernel_params(e), out)
     }
     fn topology_version(&self) -> u64 {
         self.version

@@ -10,8 +10,8 @@
 use super::{globalize, Groups, NodeSetHandle};
 use crate::energy::symbolic::KernelSpec;
 use crate::energy::{
-    flat_from_points, points_from_flat, FastDerivatives, HyperDual, Node, Potential, Scalar,
-    Stencil, Vec3,
+    points_from_flat, run_kernel, FastDerivatives, HyperDual, Node, Potential, Scalar, Stencil,
+    Vec3,
 };
 use crate::error::{check_param, Result, StarkError};
 use crate::generated;
@@ -146,7 +146,7 @@ impl DihedralBending {
 
     /// Parameters of a group.
     pub fn params(&self, h: DihedralBendingHandle) -> Result<&DihedralBendingParams> {
-        Ok(&self.groups.params[self.groups.check("dihedral bending", h.0)?])
+        self.groups.get("dihedral bending", h.0)
     }
 
     /// Change the parameters of a group.
@@ -155,10 +155,10 @@ impl DihedralBending {
         h: DihedralBendingHandle,
         params: DihedralBendingParams,
     ) -> Result<()> {
-        let i = self.groups.check("dihedral bending", h.0)?;
-        params.validate(&self.groups.labels[i])?;
-        self.groups.params[i] = params;
-        Ok(())
+        self.groups
+            .set("dihedral bending", h.0, params, |p, label| {
+                p.validate(label)
+            })
     }
 
     fn kernel_params(&self, e: usize, stencil: &Stencil<4>) -> [f64; PARAMS] {
@@ -194,19 +194,12 @@ impl Potential<4> for DihedralBending {
         _project: bool,
         out: &mut HyperDual<4>,
     ) -> FastDerivatives {
-        let p = self.kernel_params(e, stencil);
-        let mut x = [0.0; 12];
-        flat_from_points(&stencil.x, &mut x);
-        out.value = generated::dihedral_bending(
-            &x,
-            &p,
-            out.grad.as_flattened_mut(),
-            out.hess
-                .as_flattened_mut()
-                .as_flattened_mut()
-                .as_flattened_mut(),
-        );
-        FastDerivatives::Exact
+        run_kernel(
+            generated::dihedral_bending,
+            &stencil.x,
+            &self.kernel_params(e, stencil),
+            out,
+        )
     }
     fn topology_version(&self) -> u64 {
         self.version

@@ -11,8 +11,8 @@
 use super::{globalize, Groups, NodeSetHandle};
 use crate::energy::symbolic::KernelSpec;
 use crate::energy::{
-    flat_from_points, points_from_flat, FastDerivatives, HyperDual, Node, Potential, Scalar,
-    Stencil, Vec3,
+    points_from_flat, run_kernel, FastDerivatives, HyperDual, Node, Potential, Scalar, Stencil,
+    Vec3,
 };
 use crate::error::{check_param, Result, StarkError};
 use crate::generated;
@@ -151,15 +151,13 @@ impl FlatBending {
 
     /// Parameters of a group.
     pub fn params(&self, h: FlatBendingHandle) -> Result<&FlatBendingParams> {
-        Ok(&self.groups.params[self.groups.check("flat bending", h.0)?])
+        self.groups.get("flat bending", h.0)
     }
 
     /// Change the parameters of a group.
     pub fn set_params(&mut self, h: FlatBendingHandle, params: FlatBendingParams) -> Result<()> {
-        let i = self.groups.check("flat bending", h.0)?;
-        params.validate(&self.groups.labels[i])?;
-        self.groups.params[i] = params;
-        Ok(())
+        self.groups
+            .set("flat bending", h.0, params, |p, label| p.validate(label))
     }
 
     fn kernel_params(&self, e: usize, stencil: &Stencil<4>) -> [f64; PARAMS] {
@@ -201,19 +199,12 @@ impl Potential<4> for FlatBending {
         _project: bool,
         out: &mut HyperDual<4>,
     ) -> FastDerivatives {
-        let p = self.kernel_params(e, stencil);
-        let mut x = [0.0; 12];
-        flat_from_points(&stencil.x, &mut x);
-        out.value = generated::flat_bending(
-            &x,
-            &p,
-            out.grad.as_flattened_mut(),
-            out.hess
-                .as_flattened_mut()
-                .as_flattened_mut()
-                .as_flattened_mut(),
-        );
-        FastDerivatives::Exact
+        run_kernel(
+            generated::flat_bending,
+            &stencil.x,
+            &self.kernel_params(e, stencil),
+            out,
+        )
     }
     fn topology_version(&self) -> u64 {
         self.version

@@ -11,7 +11,8 @@
 use super::{Groups, NodeSetHandle};
 use crate::energy::symbolic::KernelSpec;
 use crate::energy::{
-    points_from_flat, FastDerivatives, HyperDual, Node, Potential, Scalar, Stencil, Vec3,
+    points_from_flat, run_kernel, FastDerivatives, HyperDual, Node, Potential, Scalar, Stencil,
+    Vec3,
 };
 use crate::error::{check_param, Result, StarkError};
 use crate::generated;
@@ -140,15 +141,13 @@ impl LumpedInertia {
 
     /// Parameters of a group.
     pub fn params(&self, h: InertiaHandle) -> Result<&InertiaParams> {
-        Ok(&self.groups.params[self.groups.check("inertia", h.0)?])
+        self.groups.get("inertia", h.0)
     }
 
     /// Change the parameters of a group.
     pub fn set_params(&mut self, h: InertiaHandle, params: InertiaParams) -> Result<()> {
-        let i = self.groups.check("inertia", h.0)?;
-        params.validate(&self.groups.labels[i])?;
-        self.groups.params[i] = params;
-        Ok(())
+        self.groups
+            .set("inertia", h.0, params, |p, label| p.validate(label))
     }
 
     /// Mass of each node (kg), summed over groups, for `n_nodes` nodes.
@@ -216,18 +215,12 @@ impl Potential<1> for LumpedInertia {
         _project: bool,
         out: &mut HyperDual<1>,
     ) -> FastDerivatives {
-        let p = self.kernel_params(e, stencil);
-        let x = stencil.x[0];
-        out.value = generated::lumped_inertia(
-            x.as_slice(),
-            &p,
-            out.grad.as_flattened_mut(),
-            out.hess
-                .as_flattened_mut()
-                .as_flattened_mut()
-                .as_flattened_mut(),
-        );
-        FastDerivatives::Exact
+        run_kernel(
+            generated::lumped_inertia,
+            &stencil.x,
+            &self.kernel_params(e, stencil),
+            out,
+        )
     }
     fn topology_version(&self) -> u64 {
         self.version

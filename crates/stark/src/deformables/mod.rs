@@ -93,6 +93,23 @@ impl<P> Groups<P> {
         self.params.push(params);
         (self.params.len() - 1) as u32
     }
+    /// Parameters of a group.
+    pub fn get(&self, kind: &'static str, index: u32) -> Result<&P> {
+        Ok(&self.params[self.check(kind, index)?])
+    }
+    /// Replace the parameters of a group after `validate(params, label)`.
+    pub fn set(
+        &mut self,
+        kind: &'static str,
+        index: u32,
+        params: P,
+        validate: impl FnOnce(&P, &str) -> Result<()>,
+    ) -> Result<()> {
+        let i = self.check(kind, index)?;
+        validate(&params, &self.labels[i])?;
+        self.params[i] = params;
+        Ok(())
+    }
     /// Check a group index from a handle.
     pub fn check(&self, kind: &'static str, index: u32) -> Result<usize> {
         let i = index as usize;

@@ -9,7 +9,8 @@
 use super::{Groups, NodeSetHandle};
 use crate::energy::symbolic::KernelSpec;
 use crate::energy::{
-    points_from_flat, FastDerivatives, HyperDual, Node, Potential, Scalar, Stencil, StepCheck, Vec3,
+    points_from_flat, run_kernel, FastDerivatives, HyperDual, Node, Potential, Scalar, Stencil,
+    StepCheck, Vec3,
 };
 use crate::error::{check_param, Result, StarkError};
 use crate::generated;
@@ -153,15 +154,15 @@ impl PrescribedPositions {
 
     /// Parameters of a group.
     pub fn params(&self, h: PrescribedHandle) -> Result<&PrescribedParams> {
-        Ok(&self.groups.params[self.groups.check("prescribed positions", h.0)?])
+        self.groups.get("prescribed positions", h.0)
     }
 
     /// Change the parameters of a group.
     pub fn set_params(&mut self, h: PrescribedHandle, params: PrescribedParams) -> Result<()> {
-        let i = self.groups.check("prescribed positions", h.0)?;
-        params.validate(&self.groups.labels[i])?;
-        self.groups.params[i] = params;
-        Ok(())
+        self.groups
+            .set("prescribed positions", h.0, params, |p, label| {
+                p.validate(label)
+            })
     }
 
     /// Targets of the group become `R·p + t` for the reference positions `p` (positions when the
@@ -259,16 +260,12 @@ impl Potential<1> for PrescribedPositions {
     ) -> FastDerivatives {
         let t = self.target[e];
         let k = self.groups.params[self.group[e] as usize].stiffness;
-        out.value = generated::prescribed_position(
-            stencil.x[0].as_slice(),
+        run_kernel(
+            generated::prescribed_position,
+            &stencil.x,
             &[t.x, t.y, t.z, k],
-            out.grad.as_flattened_mut(),
-            out.hess
-                .as_flattened_mut()
-                .as_flattened_mut()
-                .as_flattened_mut(),
-        );
-        FastDerivatives::Exact
+            out,
+        )
     }
     fn topology_version(&self) -> u64 {
         self.version

@@ -9,8 +9,8 @@
 use super::{globalize, Groups, NodeSetHandle};
 use crate::energy::symbolic::KernelSpec;
 use crate::energy::{
-    flat_from_points, points_from_flat, FastDerivatives, HyperDual, Node, Potential, Scalar,
-    Stencil, Vec3,
+    points_from_flat, run_kernel, FastDerivatives, HyperDual, Node, Potential, Scalar, Stencil,
+    Vec3,
 };
 use crate::error::{check_param, Result, StarkError};
 use crate::generated;
@@ -175,7 +175,7 @@ impl SegmentStrain {
 
     /// Parameters of a group.
     pub fn params(&self, h: SegmentStrainHandle) -> Result<&SegmentStrainParams> {
-        Ok(&self.groups.params[self.groups.check("segment strain", h.0)?])
+        self.groups.get("segment strain", h.0)
     }
 
     /// Change the parameters of a group.
@@ -184,10 +184,8 @@ impl SegmentStrain {
         h: SegmentStrainHandle,
         params: SegmentStrainParams,
     ) -> Result<()> {
-        let i = self.groups.check("segment strain", h.0)?;
-        params.validate(&self.groups.labels[i])?;
-        self.groups.params[i] = params;
-        Ok(())
+        self.groups
+            .set("segment strain", h.0, params, |p, label| p.validate(label))
     }
 
     fn kernel_params(&self, e: usize, stencil: &Stencil<2>) -> [f64; PARAMS] {
@@ -226,19 +224,12 @@ impl Potential<2> for SegmentStrain {
         _project: bool,
         out: &mut HyperDual<2>,
     ) -> FastDerivatives {
-        let p = self.kernel_params(e, stencil);
-        let mut x = [0.0; 6];
-        flat_from_points(&stencil.x, &mut x);
-        out.value = generated::segment_strain(
-            &x,
-            &p,
-            out.grad.as_flattened_mut(),
-            out.hess
-                .as_flattened_mut()
-                .as_flattened_mut()
-                .as_flattened_mut(),
-        );
-        FastDerivatives::Exact
+        run_kernel(
+            generated::segment_strain,
+            &stencil.x,
+            &self.kernel_params(e, stencil),
+            out,
+        )
     }
     fn topology_version(&self) -> u64 {
         self.version

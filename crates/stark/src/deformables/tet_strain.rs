@@ -282,15 +282,13 @@ impl TetStrain {
 
     /// Parameters of a group.
     pub fn params(&self, h: TetStrainHandle) -> Result<&TetStrainParams> {
-        Ok(&self.groups.params[self.groups.check("tet strain", h.0)?])
+        self.groups.get("tet strain", h.0)
     }
 
     /// Change the parameters of a group (validated).
     pub fn set_params(&mut self, h: TetStrainHandle, params: TetStrainParams) -> Result<()> {
-        let i = self.groups.check("tet strain", h.0)?;
-        params.validate(&self.groups.labels[i])?;
-        self.groups.params[i] = params;
-        Ok(())
+        self.groups
+            .set("tet strain", h.0, params, |p, label| p.validate(label))
     }
 
     /// Number of tets with an inverted or flat current configuration (`det F ≤ 0`) at positions `x`.

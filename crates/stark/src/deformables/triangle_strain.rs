@@ -327,7 +327,7 @@ impl TriangleStrain {
 
     /// Parameters of a group.
     pub fn params(&self, h: TriangleStrainHandle) -> Result<&TriangleStrainParams> {
-        Ok(&self.groups.params[self.groups.check("triangle strain", h.0)?])
+        self.groups.get("triangle strain", h.0)
     }
 
     /// Change the parameters of a group.
@@ -336,10 +336,8 @@ impl TriangleStrain {
         h: TriangleStrainHandle,
         params: TriangleStrainParams,
     ) -> Result<()> {
-        let i = self.groups.check("triangle strain", h.0)?;
-        params.validate(&self.groups.labels[i])?;
-        self.groups.params[i] = params;
-        Ok(())
+        self.groups
+            .set("triangle strain", h.0, params, |p, label| p.validate(label))
     }
 
     /// Parameters of triangle `e` (layout of [`PARAMS`]) and whether it is damped.

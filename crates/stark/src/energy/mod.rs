@@ -13,7 +13,7 @@ pub mod term;
 pub mod testing;
 
 pub use dual::HyperDual;
-pub use potential::{FastDerivatives, Node, Potential, PotentialTerm, Stencil};
+pub use potential::{run_kernel, FastDerivatives, Kernel, Node, Potential, PotentialTerm, Stencil};
 pub use scalar::Scalar;
 pub use tensor::{flat_from_points, points_from_flat, Mat, Mat2, Mat3, Mat32, Vec3};
 pub use term::{EnergyTerm, EvalMode, StepCheck};

@@ -139,6 +139,30 @@ pub fn dual_derivatives<P: Potential<N>, const N: usize>(
     d
 }
 
+/// A generated kernel: `(x, p, grad, hess) -> value` on flat slices.
+pub type Kernel = fn(&[f64], &[f64], &mut [f64], &mut [f64]) -> f64;
+
+/// Run a generated kernel on the stencil positions, writing value, gradient and Hessian to `out`.
+pub fn run_kernel<const N: usize>(
+    kernel: Kernel,
+    x: &[Vector3<f64>; N],
+    params: &[f64],
+    out: &mut HyperDual<N>,
+) -> FastDerivatives {
+    let mut flat = [0.0; 12];
+    super::tensor::flat_from_points(x, &mut flat);
+    out.value = kernel(
+        &flat[..3 * N],
+        params,
+        out.grad.as_flattened_mut(),
+        out.hess
+            .as_flattened_mut()
+            .as_flattened_mut()
+            .as_flattened_mut(),
+    );
+    FastDerivatives::Exact
+}
+
 /// Element derivatives by the fastest available path, written into `out`; returns whether the
 /// Hessian is already projected.
 pub fn element_derivatives<P: Potential<N>, const N: usize>(
