@@ -70,20 +70,14 @@ fn base_settings(out: PathBuf, threads: usize, frames: bool) -> Settings {
     s
 }
 
-fn run_with_progress(
-    sim: &mut Simulation,
-    duration: f64,
-    quiet: bool,
-) -> stark::Result<RunSummary> {
+fn run_with_progress(sim: &mut Simulation, duration: f64, quiet: bool) -> stark::Result<RunSummary> {
     let bar = if quiet {
         ProgressBar::hidden()
     } else {
         let bar = ProgressBar::new((duration * 1000.0).round() as u64);
         bar.set_style(
-            ProgressStyle::with_template(
-                "{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} ms simulated  {msg}",
-            )
-            .expect("valid template"),
+            ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} ms simulated  {msg}")
+                .expect("valid template"),
         );
         bar
     };
@@ -128,11 +122,7 @@ fn print_summary(s: &RunSummary, out: &std::path::Path) {
         100.0 * t.line_search_s / total,
         100.0 * t.prepare_s / total
     );
-    println!(
-        "output                {} frames in {}",
-        s.frames,
-        out.display()
-    );
+    println!("output                {} frames in {}", s.frames, out.display());
 }
 
 fn run(
@@ -200,17 +190,7 @@ fn bench(scenes: Vec<String>, threads: Vec<usize>, json: Option<PathBuf>) -> sta
     };
     println!(
         "{:<26} {:>3} {:>6} {:>9} {:>11} {:>9} {:>8} {:>6} {:>6} {:>6} {:>10}",
-        "scene",
-        "thr",
-        "steps",
-        "wall [s]",
-        "s/sim. s",
-        "Newton/st",
-        "CG/Newt",
-        "eval%",
-        "solve%",
-        "ls%",
-        "original"
+        "scene", "thr", "steps", "wall [s]", "s/sim. s", "Newton/st", "CG/Newt", "eval%", "solve%", "ls%", "original"
     );
     let mut results = Vec::new();
     for name in &names {
@@ -222,8 +202,7 @@ fn bench(scenes: Vec<String>, threads: Vec<usize>, json: Option<PathBuf>) -> sta
             let mut sim = (scene.build)(settings)?;
             let s = sim.run(scene.duration_s)?;
             let tt = &s.times;
-            let total =
-                (tt.prepare_s + tt.evaluation_s + tt.linear_solve_s + tt.line_search_s).max(1e-12);
+            let total = (tt.prepare_s + tt.evaluation_s + tt.linear_solve_s + tt.line_search_s).max(1e-12);
             let original = original_wall_s(name)
                 .map(|w| format!("{w:.1} s"))
                 .unwrap_or_else(|| "-".into());
@@ -282,11 +261,7 @@ fn main() -> ExitCode {
             }
             Ok(())
         }
-        Command::Bench {
-            scenes,
-            threads,
-            json,
-        } => bench(scenes, threads, json),
+        Command::Bench { scenes, threads, json } => bench(scenes, threads, json),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

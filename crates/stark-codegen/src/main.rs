@@ -7,8 +7,7 @@ fn main() {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../stark/src/generated/kernels.rs");
     let start = std::time::Instant::now();
     let source = stark::generated::generate_source();
-    std::fs::write(&path, &source)
-        .unwrap_or_else(|e| panic!("cannot write {}: {e}", path.display()));
+    std::fs::write(&path, &source).unwrap_or_else(|e| panic!("cannot write {}: {e}", path.display()));
     println!(
         "wrote {} ({} kernels, {} lines) in {:.2} s",
         path.display(),

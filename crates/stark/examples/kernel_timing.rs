@@ -1,9 +1,7 @@
 //! Times one element's value/gradient/Hessian by each path: generated Ψ(F) kernel with and without
 //! projection, and hyper-duals.
 use nalgebra::Vector3;
-use stark::deformables::{
-    NodeSetHandle, TetStrain, TetStrainParams, TriangleStrain, TriangleStrainParams,
-};
+use stark::deformables::{NodeSetHandle, TetStrain, TetStrainParams, TriangleStrain, TriangleStrainParams};
 use stark::energy::potential::{dual_derivatives, element_derivatives};
 use stark::energy::testing::TestState;
 use stark::energy::{Potential, Scalar, Stencil};
@@ -88,8 +86,7 @@ fn main() {
         ),
     ] {
         let mut tets = TetStrain::default();
-        tets.add(&st.nodes, set, "t", &[[0, 1, 2, 3]], params)
-            .unwrap();
+        tets.add(&st.nodes, set, "t", &[[0, 1, 2, 3]], params).unwrap();
         time(name, &tets, &st);
     }
     let mut tris = TriangleStrain::default();

@@ -8,12 +8,7 @@ fn main() -> stark::Result<()> {
     let mut settings = Settings::default(); // dt 1/30 s, residual 1e-6 N, frames at 30 fps
     settings.output.directory = "output/cloth".into();
     let mut sim = Simulation::new(settings)?;
-    let cloth = sim.add_surface_grid(
-        "cloth",
-        [1.0, 1.0],
-        [32, 32],
-        &SurfaceMaterial::cotton_fabric(),
-    )?;
+    let cloth = sim.add_surface_grid("cloth", [1.0, 1.0], [32, 32], &SurfaceMaterial::cotton_fabric())?;
     let pin = PrescribedParams {
         stiffness: 1e6,
         ..Default::default()

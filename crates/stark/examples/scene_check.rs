@@ -3,13 +3,8 @@ use stark::scenes::find_scene;
 use stark::Settings;
 
 fn main() {
-    let name = std::env::args()
-        .nth(1)
-        .unwrap_or_else(|| "hanging_cloth".into());
-    let threads: usize = std::env::args()
-        .nth(2)
-        .map(|s| s.parse().unwrap())
-        .unwrap_or(1);
+    let name = std::env::args().nth(1).unwrap_or_else(|| "hanging_cloth".into());
+    let threads: usize = std::env::args().nth(2).map(|s| s.parse().unwrap()).unwrap_or(1);
     let scene = find_scene(&name).unwrap();
     let mut settings = Settings::default();
     settings.threads = threads;

@@ -91,11 +91,7 @@ fn read_one(path: &str) {
 
 fn write_samples(dir: &std::path::Path) {
     std::fs::create_dir_all(dir).unwrap();
-    let tets = tet_grid(
-        Vector3::new(0.1, -0.2, 0.3),
-        Vector3::new(0.5, 0.4, 0.3),
-        [3, 2, 2],
-    );
+    let tets = tet_grid(Vector3::new(0.1, -0.2, 0.3), Vector3::new(0.5, 0.4, 0.3), [3, 2, 2]);
     let tris = triangle_grid([0.0, 0.0], [1.0, 0.5], [4, 3], 0.25);
     let line = segment_line(Vector3::zeros(), Vector3::new(1.0, 2.0, 3.0), 7);
     let cloud: Vec<Vector3<f64>> = (0..10)
@@ -103,21 +99,11 @@ fn write_samples(dir: &std::path::Path) {
         .collect();
 
     let mut samples = Vec::new();
-    for (suffix, encoding) in [
-        ("binary", VtkEncoding::Binary),
-        ("ascii", VtkEncoding::Ascii),
-    ] {
-        for (precision_suffix, precision) in
-            [("", VtkPrecision::Float64), ("_f32", VtkPrecision::Float32)]
-        {
+    for (suffix, encoding) in [("binary", VtkEncoding::Binary), ("ascii", VtkEncoding::Ascii)] {
+        for (precision_suffix, precision) in [("", VtkPrecision::Float64), ("_f32", VtkPrecision::Float32)] {
             // Tets with vectors, scalars and cell scalars.
-            let velocity: Vec<_> = tets
-                .vertices
-                .iter()
-                .map(|p| Vector3::new(p.y, -p.x, 1.0))
-                .collect();
-            let temperature: Vec<f64> =
-                (0..tets.vertices.len()).map(|i| 300.0 + i as f64).collect();
+            let velocity: Vec<_> = tets.vertices.iter().map(|p| Vector3::new(p.y, -p.x, 1.0)).collect();
+            let temperature: Vec<f64> = (0..tets.vertices.len()).map(|i| 300.0 + i as f64).collect();
             let volume_id: Vec<f64> = (0..tets.elements.len()).map(|i| i as f64 * 0.5).collect();
             let file = format!("tets_{suffix}{precision_suffix}.vtk");
             VtkWriter::new(&tets.vertices, VtkCells::Tets(&tets.elements))

@@ -28,9 +28,7 @@ pub enum StarkError {
         detail: String,
     },
     /// An element refers to a node that does not exist.
-    #[error(
-        "{kind} {index} of '{object}' refers to node {node}, but the object has {n_nodes} nodes"
-    )]
+    #[error("{kind} {index} of '{object}' refers to node {node}, but the object has {n_nodes} nodes")]
     NodeOutOfRange {
         /// Object label.
         object: String,
@@ -100,13 +98,7 @@ pub enum StarkError {
 pub type Result<T, E = StarkError> = std::result::Result<T, E>;
 
 /// Check that `value` is finite and satisfies `ok`; otherwise an [`StarkError::InvalidParameter`].
-pub fn check_param(
-    object: &str,
-    field: &'static str,
-    value: f64,
-    ok: bool,
-    expected: &'static str,
-) -> Result<()> {
+pub fn check_param(object: &str, field: &'static str, value: f64, ok: bool, expected: &'static str) -> Result<()> {
     if value.is_nan() || !ok {
         return Err(StarkError::InvalidParameter {
             object: object.to_string(),

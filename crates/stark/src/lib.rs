@@ -4,6 +4,7 @@
 //! minimises their sum over the end-of-step velocities (DESIGN.md §2).
 #![warn(missing_docs)]
 
+pub mod contact;
 pub mod deformables;
 pub mod energy;
 pub mod error;

@@ -31,13 +31,15 @@ pub fn builtin_scenes() -> Vec<BuiltinScene> {
         },
         BuiltinScene {
             name: "hanging_cloth",
-            description: "Original Stark scene: 1 m cotton cloth, 32×32, hanging from two corners (151 steps of 1/30 s)",
+            description:
+                "Original Stark scene: 1 m cotton cloth, 32×32, hanging from two corners (151 steps of 1/30 s)",
             duration_s: 151.0 / 30.0,
             build: hanging_cloth,
         },
         BuiltinScene {
             name: "hanging_deformable_box",
-            description: "Original Stark scene: 0.5 m soft-rubber box, 10³ cells (12000 tets), hanging from two corners",
+            description:
+                "Original Stark scene: 0.5 m soft-rubber box, 10³ cells (12000 tets), hanging from two corners",
             duration_s: 151.0 / 30.0,
             build: hanging_deformable_box,
         },
@@ -58,16 +60,13 @@ pub fn builtin_scenes() -> Vec<BuiltinScene> {
 
 /// The built-in scene called `name`.
 pub fn find_scene(name: &str) -> Result<BuiltinScene> {
-    builtin_scenes()
-        .into_iter()
-        .find(|s| s.name == name)
-        .ok_or_else(|| {
-            let names: Vec<_> = builtin_scenes().iter().map(|s| s.name).collect();
-            StarkError::InvalidInput(format!(
-                "unknown scene '{name}' (built-in scenes: {})",
-                names.join(", ")
-            ))
-        })
+    builtin_scenes().into_iter().find(|s| s.name == name).ok_or_else(|| {
+        let names: Vec<_> = builtin_scenes().iter().map(|s| s.name).collect();
+        StarkError::InvalidInput(format!(
+            "unknown scene '{name}' (built-in scenes: {})",
+            names.join(", ")
+        ))
+    })
 }
 
 /// The original's convergence settings: residual 1e-6 on the momentum-unit gradient (1e-6/dt N)
@@ -83,12 +82,7 @@ pub fn default_scene(mut settings: Settings) -> Result<Simulation> {
     settings.name = "default".into();
     settings.time_step_s = 1.0 / 30.0;
     let mut sim = Simulation::new(settings)?;
-    let cloth = sim.add_surface_grid(
-        "cloth",
-        [1.0, 1.0],
-        [32, 32],
-        &SurfaceMaterial::cotton_fabric(),
-    )?;
+    let cloth = sim.add_surface_grid("cloth", [1.0, 1.0], [32, 32], &SurfaceMaterial::cotton_fabric())?;
     let pin = PrescribedParams {
         stiffness: 1e6,
         ..Default::default()
@@ -115,12 +109,7 @@ fn hanging_cloth_n(mut settings: Settings, n: usize, name: &str) -> Result<Simul
     settings.time_step_s = 1.0 / 30.0;
     stark_tolerances(&mut settings);
     let mut sim = Simulation::new(settings)?;
-    let cloth = sim.add_surface_grid(
-        "cloth",
-        [1.0, 1.0],
-        [n, n],
-        &SurfaceMaterial::cotton_fabric(),
-    )?;
+    let cloth = sim.add_surface_grid("cloth", [1.0, 1.0], [n, n], &SurfaceMaterial::cotton_fabric())?;
     let pin = PrescribedParams {
         stiffness: 1e6,
         ..Default::default()

@@ -1,5 +1,6 @@
 //! The simulation: state, models, the step loop with adaptive time stepping, events and output.
 
+use crate::contact::{Contact, ContactStats};
 use crate::deformables::{Deformables, NodeSetHandle};
 use crate::energy::{EnergyTerm, StepCheck};
 use crate::error::{Result, StarkError};
@@ -53,6 +54,8 @@ pub struct StepReport {
     pub wall_time_s: f64,
     /// Wall time per phase over all attempts.
     pub times: PhaseTimes,
+    /// Contact statistics (when the scene has contact objects).
+    pub contact: Option<ContactStats>,
 }
 
 /// Totals of a run.
@@ -98,6 +101,8 @@ pub struct Simulation {
     pub nodes: NodeArrays,
     /// Deformable energy models.
     pub deformables: Deformables,
+    /// Contact objects, barrier, CCD and friction.
+    pub contact: Contact,
     /// Frames and logs.
     pub output: Output,
     custom: Vec<Box<dyn EnergyTerm>>,
@@ -121,12 +126,7 @@ impl Simulation {
                 rayon::ThreadPoolBuilder::new()
                     .num_threads(settings.threads)
                     .build()
-                    .map_err(|e| {
-                        StarkError::InvalidInput(format!(
-                            "cannot start {} threads: {e}",
-                            settings.threads
-                        ))
-                    })?,
+                    .map_err(|e| StarkError::InvalidInput(format!("cannot start {} threads: {e}", settings.threads)))?,
             )
         } else {
             None
@@ -140,6 +140,7 @@ impl Simulation {
             settings,
             nodes: NodeArrays::default(),
             deformables: Deformables::default(),
+            contact: Contact::default(),
             output: Output::default(),
             custom: Vec::new(),
             time: 0.0,
@@ -190,18 +191,13 @@ impl Simulation {
                 "object label '{label}' is empty or already used"
             )));
         }
-        if let Some(i) = positions
-            .iter()
-            .position(|p| !p.iter().all(|c| c.is_finite()))
-        {
+        if let Some(i) = positions.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
             return Err(StarkError::InvalidInput(format!(
                 "node {i} of '{label}' has a non-finite position"
             )));
         }
         if positions.is_empty() {
-            return Err(StarkError::InvalidInput(format!(
-                "object '{label}' has no nodes"
-            )));
+            return Err(StarkError::InvalidInput(format!("object '{label}' has no nodes")));
         }
         let first = self.nodes.push(positions);
         let handle = NodeSetHandle {
@@ -253,11 +249,8 @@ impl Simulation {
 
     fn terms_mut(&mut self) -> Vec<&mut dyn EnergyTerm> {
         let mut terms = self.deformables.terms_mut();
-        terms.extend(
-            self.custom
-                .iter_mut()
-                .map(|t| &mut **t as &mut dyn EnergyTerm),
-        );
+        terms.push(&mut self.contact);
+        terms.extend(self.custom.iter_mut().map(|t| &mut **t as &mut dyn EnergyTerm));
         terms
     }
 
@@ -282,17 +275,23 @@ impl Simulation {
         if self.started {
             return Ok(());
         }
+        let crossings = self.contact.find_intersections(&self.nodes.x);
+        if !crossings.is_empty() {
+            let shown: Vec<_> = crossings.iter().take(5).cloned().collect();
+            return Err(StarkError::InvalidInput(format!(
+                "the initial state has {} intersecting edge–triangle pairs (objects must start apart): {}{}",
+                crossings.len(),
+                shown.join("; "),
+                if crossings.len() > 5 { "; …" } else { "" }
+            )));
+        }
         self.started = true;
         let dir = self.settings.output.directory.clone();
         if self.settings.output.step_log {
             self.output.open_log(&dir, &self.settings.name)?;
         }
-        if self.settings.output.frames
-            && self.settings.output.fps > 0.0
-            && !self.output.meshes.is_empty()
-        {
-            self.output
-                .write_frame(&dir, &self.settings.name, &self.nodes)?;
+        if self.settings.output.frames && self.settings.output.fps > 0.0 && !self.output.meshes.is_empty() {
+            self.output.write_frame(&dir, &self.settings.name, &self.nodes)?;
             self.output.next_frame_time = 1.0 / self.settings.output.fps;
         }
         Ok(())
@@ -311,6 +310,9 @@ impl Simulation {
             let dt = self.dt;
             let t_end = self.time + dt;
             self.run_events(t_end)?;
+            self.contact.settings = self.settings.contact.clone();
+            let masses = self.deformables.inertia.node_masses(self.nodes.len());
+            self.contact.initialize_stiffness(&masses, self.settings.time_step_s);
             let gravity = self.gravity();
             let newton_settings = self.settings.newton.clone();
             let mut velocities = std::mem::take(&mut self.velocities);
@@ -340,15 +342,8 @@ impl Simulation {
                         t.before_step(&state);
                     }
                 }
-                let mut solve = || {
-                    newton::solve(
-                        &mut newton_ws,
-                        &mut terms,
-                        &problem,
-                        &mut velocities,
-                        &newton_settings,
-                    )
-                };
+                let mut solve =
+                    || newton::solve(&mut newton_ws, &mut terms, &problem, &mut velocities, &newton_settings);
                 match &pool {
                     Some(p) => p.install(solve),
                     None => solve(),
@@ -393,7 +388,10 @@ impl Simulation {
                                 time_s: self.time,
                                 dt_s: dt,
                                 dt_min_s: self.settings.min_time_step_s,
-                                reason: format!("still out of tolerance after {hardening_retries} hardenings: {}", retry.join("; ")),
+                                reason: format!(
+                                    "still out of tolerance after {hardening_retries} hardenings: {}",
+                                    retry.join("; ")
+                                ),
                             });
                         }
                         continue;
@@ -421,8 +419,7 @@ impl Simulation {
                         self.nodes = nodes;
                     }
                     if self.settings.adaptive_time_step {
-                        self.dt =
-                            (dt * self.settings.time_step_growth).min(self.settings.time_step_s);
+                        self.dt = (dt * self.settings.time_step_growth).min(self.settings.time_step_s);
                     }
                     let step_report = StepReport {
                         step: self.summary.steps,
@@ -440,6 +437,7 @@ impl Simulation {
                         total_newton_iterations: total_newton,
                         wall_time_s: wall.elapsed().as_secs_f64(),
                         times,
+                        contact: (!self.contact.objects().is_empty()).then_some(self.contact.stats),
                     };
                     self.record(&step_report)?;
                     return Ok(step_report);
@@ -487,8 +485,7 @@ impl Simulation {
         if self.settings.output.frames && fps > 0.0 && !self.output.meshes.is_empty() {
             let dir = self.settings.output.directory.clone();
             while self.time >= self.output.next_frame_time - 1e-9 * self.dt {
-                self.output
-                    .write_frame(&dir, &self.settings.name, &self.nodes)?;
+                self.output.write_frame(&dir, &self.settings.name, &self.nodes)?;
                 self.output.next_frame_time += 1.0 / fps;
             }
         }

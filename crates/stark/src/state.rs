@@ -33,8 +33,7 @@ impl NodeArrays {
         let first = self.x.len();
         self.rest.extend_from_slice(positions);
         self.x.extend_from_slice(positions);
-        self.v
-            .extend(std::iter::repeat_n(Vector3::zeros(), positions.len()));
+        self.v.extend(std::iter::repeat_n(Vector3::zeros(), positions.len()));
         self.force
             .extend(std::iter::repeat_n(Vector3::zeros(), positions.len()));
         self.acceleration
@@ -71,12 +70,7 @@ impl EvalState<'_> {
 }
 
 /// Positions `x0 + dt·v` for all nodes.
-pub fn positions_from_velocities(
-    nodes: &NodeArrays,
-    v: &[Vector3<f64>],
-    dt: f64,
-    out: &mut Vec<Vector3<f64>>,
-) {
+pub fn positions_from_velocities(nodes: &NodeArrays, v: &[Vector3<f64>], dt: f64, out: &mut Vec<Vector3<f64>>) {
     use rayon::prelude::*;
     out.resize(v.len(), Vector3::zeros());
     out.par_iter_mut()

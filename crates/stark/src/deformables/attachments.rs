@@ -7,8 +7,8 @@
 use super::{Groups, NodeSetHandle};
 use crate::energy::symbolic::KernelSpec;
 use crate::energy::{
-    points_from_flat, run_kernel, EnergyTerm, FastDerivatives, HyperDual, Kernel, Node, Potential,
-    PotentialTerm, Scalar, Stencil, StepCheck, Vec3,
+    points_from_flat, run_kernel, EnergyTerm, FastDerivatives, HyperDual, Kernel, Node, Potential, PotentialTerm,
+    Scalar, Stencil, StepCheck, Vec3,
 };
 use crate::error::{check_param, Result, StarkError};
 use crate::generated;
@@ -177,13 +177,7 @@ impl<const N: usize> Potential<N> for AttachmentSet<N> {
     fn energy<S: Scalar>(&self, e: usize, x: &[Vec3<S>; N], _stencil: &Stencil<N>) -> S {
         attachment_energy(x, &self.kernel_params(e).map(S::constant))
     }
-    fn derivatives(
-        &self,
-        e: usize,
-        stencil: &Stencil<N>,
-        _project: bool,
-        out: &mut HyperDual<N>,
-    ) -> FastDerivatives {
+    fn derivatives(&self, e: usize, stencil: &Stencil<N>, _project: bool, out: &mut HyperDual<N>) -> FastDerivatives {
         let kernel: Kernel = match N {
             2 => generated::attachment_point_point,
             3 => generated::attachment_point_edge,
@@ -205,10 +199,7 @@ impl<const N: usize> Potential<N> for AttachmentSet<N> {
             if !tol.is_finite() {
                 continue;
             }
-            let worst = range
-                .clone()
-                .map(|e| self.gap(e, state.x))
-                .fold(0.0, f64::max);
+            let worst = range.clone().map(|e| self.gap(e, state.x)).fold(0.0, f64::max);
             if worst > tol {
                 let p = &mut self.groups.params[g];
                 p.stiffness *= 2.0;
@@ -355,11 +346,7 @@ impl Attachments {
 
     /// Largest gap of a group at positions `x`, m.
     pub fn max_gap_m(&self, h: AttachmentHandle, x: &[nalgebra::Vector3<f64>]) -> Result<f64> {
-        fn worst<const N: usize>(
-            s: &AttachmentSet<N>,
-            g: u32,
-            x: &[nalgebra::Vector3<f64>],
-        ) -> Result<f64> {
+        fn worst<const N: usize>(s: &AttachmentSet<N>, g: u32, x: &[nalgebra::Vector3<f64>]) -> Result<f64> {
             let g = s.groups.check("attachment", g)?;
             Ok(s.ranges[g].clone().map(|e| s.gap(e, x)).fold(0.0, f64::max))
         }
@@ -372,11 +359,7 @@ impl Attachments {
 
     /// The three terms, for the solver.
     pub fn terms_mut(&mut self) -> Vec<&mut dyn EnergyTerm> {
-        vec![
-            &mut self.point_point,
-            &mut self.point_edge,
-            &mut self.point_triangle,
-        ]
+        vec![&mut self.point_point, &mut self.point_edge, &mut self.point_triangle]
     }
 }
 
@@ -405,8 +388,7 @@ mod tests {
             stiffness: 1e4,
             tolerance_m: 1e-3,
         };
-        att.add_point_point("pp", set, &[0], set, &[4], p.clone())
-            .unwrap();
+        att.add_point_point("pp", set, &[0], set, &[4], p.clone()).unwrap();
         att.add_point_edge("pe", set, &[0], set, &[[1, 2]], &[0.3], p.clone())
             .unwrap();
         att.add_point_triangle("pt", set, &[0], set, &[[1, 2, 3]], &[[0.2, 0.5, 0.3]], p)

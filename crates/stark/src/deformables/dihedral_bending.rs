@@ -9,10 +9,7 @@
 
 use super::{globalize, Groups, NodeSetHandle};
 use crate::energy::symbolic::KernelSpec;
-use crate::energy::{
-    points_from_flat, run_kernel, FastDerivatives, HyperDual, Node, Potential, Scalar, Stencil,
-    Vec3,
-};
+use crate::energy::{points_from_flat, run_kernel, FastDerivatives, HyperDual, Node, Potential, Scalar, Stencil, Vec3};
 use crate::error::{check_param, Result, StarkError};
 use crate::generated;
 use crate::geometry::mesh::find_hinges;
@@ -114,8 +111,8 @@ impl DihedralBending {
         params: DihedralBendingParams,
     ) -> Result<DihedralBendingHandle> {
         params.validate(label)?;
-        let local = find_hinges(triangles)
-            .map_err(|e| StarkError::InvalidInput(format!("bending of '{label}': {e}")))?;
+        let local =
+            find_hinges(triangles).map_err(|e| StarkError::InvalidInput(format!("bending of '{label}': {e}")))?;
         let hinges = globalize(&set, label, "hinge", &local)?;
         let mut rest = Vec::with_capacity(hinges.len());
         for (index, h) in hinges.iter().enumerate() {
@@ -150,15 +147,9 @@ impl DihedralBending {
     }
 
     /// Change the parameters of a group.
-    pub fn set_params(
-        &mut self,
-        h: DihedralBendingHandle,
-        params: DihedralBendingParams,
-    ) -> Result<()> {
+    pub fn set_params(&mut self, h: DihedralBendingHandle, params: DihedralBendingParams) -> Result<()> {
         self.groups
-            .set("dihedral bending", h.0, params, |p, label| {
-                p.validate(label)
-            })
+            .set("dihedral bending", h.0, params, |p, label| p.validate(label))
     }
 
     fn kernel_params(&self, e: usize, stencil: &Stencil<4>) -> [f64; PARAMS] {
@@ -187,13 +178,7 @@ impl Potential<4> for DihedralBending {
     fn energy<S: Scalar>(&self, e: usize, x: &[Vec3<S>; 4], stencil: &Stencil<4>) -> S {
         dihedral_bending_energy(x, &self.kernel_params(e, stencil).map(S::constant))
     }
-    fn derivatives(
-        &self,
-        e: usize,
-        stencil: &Stencil<4>,
-        _project: bool,
-        out: &mut HyperDual<4>,
-    ) -> FastDerivatives {
+    fn derivatives(&self, e: usize, stencil: &Stencil<4>, _project: bool, out: &mut HyperDual<4>) -> FastDerivatives {
         run_kernel(
             generated::dihedral_bending,
             &stencil.x,
@@ -230,13 +215,7 @@ mod tests {
             Vector3::new(0.0, 0.4, -2.0),
             Vector3::new(0.2, 0.1, 1.0),
         ];
-        let st = TestState::new(
-            rest.clone(),
-            rest.clone(),
-            vec![Vector3::zeros(); 4],
-            v,
-            0.05,
-        );
+        let st = TestState::new(rest.clone(), rest.clone(), vec![Vector3::zeros(); 4], v, 0.05);
         let set = NodeSetHandle {
             index: 0,
             first: 0,
@@ -264,8 +243,7 @@ mod tests {
             0.05,
         );
         let eval = st0.eval();
-        let d =
-            crate::energy::potential::dual_derivatives(&db, 0, &Stencil::new(db.nodes(0), &eval));
+        let d = crate::energy::potential::dual_derivatives(&db, 0, &Stencil::new(db.nodes(0), &eval));
         assert!(d.gradient_flat().iter().all(|g| g.abs() < 1e-12));
     }
 }

@@ -10,10 +10,7 @@
 
 use super::{globalize, Groups, NodeSetHandle};
 use crate::energy::symbolic::KernelSpec;
-use crate::energy::{
-    points_from_flat, run_kernel, FastDerivatives, HyperDual, Node, Potential, Scalar, Stencil,
-    Vec3,
-};
+use crate::energy::{points_from_flat, run_kernel, FastDerivatives, HyperDual, Node, Potential, Scalar, Stencil, Vec3};
 use crate::error::{check_param, Result, StarkError};
 use crate::generated;
 use crate::geometry::mesh::find_hinges;
@@ -113,19 +110,13 @@ impl FlatBending {
         params: FlatBendingParams,
     ) -> Result<FlatBendingHandle> {
         params.validate(label)?;
-        let local = find_hinges(triangles)
-            .map_err(|e| StarkError::InvalidInput(format!("bending of '{label}': {e}")))?;
+        let local =
+            find_hinges(triangles).map_err(|e| StarkError::InvalidInput(format!("bending of '{label}': {e}")))?;
         let hinges = globalize(&set, label, "hinge", &local)?;
         let mut weights = Vec::with_capacity(hinges.len());
         for (index, h) in hinges.iter().enumerate() {
             let x = h.map(|i| nodes.rest[i as usize]);
-            let (e0, e1, e2, e3, e4) = (
-                x[1] - x[0],
-                x[2] - x[0],
-                x[3] - x[0],
-                x[2] - x[1],
-                x[3] - x[1],
-            );
+            let (e0, e1, e2, e3, e4) = (x[1] - x[0], x[2] - x[0], x[3] - x[0], x[2] - x[1], x[3] - x[1]);
             let a0 = 0.5 * e0.cross(&e1).norm();
             let a1 = 0.5 * e0.cross(&e2).norm();
             let (c01, c02, c03, c04) = (cot(e0, e1), cot(e0, e2), cot(-e0, e3), cot(-e0, e4));
@@ -192,13 +183,7 @@ impl Potential<4> for FlatBending {
     fn energy<S: Scalar>(&self, e: usize, x: &[Vec3<S>; 4], stencil: &Stencil<4>) -> S {
         flat_bending_energy(x, &self.kernel_params(e, stencil).map(S::constant))
     }
-    fn derivatives(
-        &self,
-        e: usize,
-        stencil: &Stencil<4>,
-        _project: bool,
-        out: &mut HyperDual<4>,
-    ) -> FastDerivatives {
+    fn derivatives(&self, e: usize, stencil: &Stencil<4>, _project: bool, out: &mut HyperDual<4>) -> FastDerivatives {
         run_kernel(
             generated::flat_bending,
             &stencil.x,
@@ -234,13 +219,7 @@ mod tests {
             Vector3::new(0.0, 0.4, -2.0),
             Vector3::new(0.2, 0.1, 1.0),
         ];
-        let st = TestState::new(
-            rest.clone(),
-            rest.clone(),
-            vec![Vector3::zeros(); 4],
-            v,
-            0.05,
-        );
+        let st = TestState::new(rest.clone(), rest.clone(), vec![Vector3::zeros(); 4], v, 0.05);
         let set = NodeSetHandle {
             index: 0,
             first: 0,

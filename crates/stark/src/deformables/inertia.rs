@@ -10,10 +10,7 @@
 
 use super::{Groups, NodeSetHandle};
 use crate::energy::symbolic::KernelSpec;
-use crate::energy::{
-    points_from_flat, run_kernel, FastDerivatives, HyperDual, Node, Potential, Scalar, Stencil,
-    Vec3,
-};
+use crate::energy::{points_from_flat, run_kernel, FastDerivatives, HyperDual, Node, Potential, Scalar, Stencil, Vec3};
 use crate::error::{check_param, Result, StarkError};
 use crate::generated;
 use serde::{Deserialize, Serialize};
@@ -146,16 +143,14 @@ impl LumpedInertia {
 
     /// Change the parameters of a group.
     pub fn set_params(&mut self, h: InertiaHandle, params: InertiaParams) -> Result<()> {
-        self.groups
-            .set("inertia", h.0, params, |p, label| p.validate(label))
+        self.groups.set("inertia", h.0, params, |p, label| p.validate(label))
     }
 
     /// Mass of each node (kg), summed over groups, for `n_nodes` nodes.
     pub fn node_masses(&self, n_nodes: usize) -> Vec<f64> {
         let mut m = vec![0.0; n_nodes];
         for k in 0..self.node.len() {
-            m[self.node[k] as usize] +=
-                self.measure[k] * self.groups.params[self.group[k] as usize].density;
+            m[self.node[k] as usize] += self.measure[k] * self.groups.params[self.group[k] as usize].density;
         }
         m
     }
@@ -208,13 +203,7 @@ impl Potential<1> for LumpedInertia {
     fn energy<S: Scalar>(&self, e: usize, x: &[Vec3<S>; 1], stencil: &Stencil<1>) -> S {
         inertia_energy(x, &self.kernel_params(e, stencil).map(S::constant))
     }
-    fn derivatives(
-        &self,
-        e: usize,
-        stencil: &Stencil<1>,
-        _project: bool,
-        out: &mut HyperDual<1>,
-    ) -> FastDerivatives {
+    fn derivatives(&self, e: usize, stencil: &Stencil<1>, _project: bool, out: &mut HyperDual<1>) -> FastDerivatives {
         run_kernel(
             generated::lumped_inertia,
             &stencil.x,

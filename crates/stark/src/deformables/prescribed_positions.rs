@@ -9,8 +9,7 @@
 use super::{Groups, NodeSetHandle};
 use crate::energy::symbolic::KernelSpec;
 use crate::energy::{
-    points_from_flat, run_kernel, FastDerivatives, HyperDual, Node, Potential, Scalar, Stencil,
-    StepCheck, Vec3,
+    points_from_flat, run_kernel, FastDerivatives, HyperDual, Node, Potential, Scalar, Stencil, StepCheck, Vec3,
 };
 use crate::error::{check_param, Result, StarkError};
 use crate::generated;
@@ -160,9 +159,7 @@ impl PrescribedPositions {
     /// Change the parameters of a group.
     pub fn set_params(&mut self, h: PrescribedHandle, params: PrescribedParams) -> Result<()> {
         self.groups
-            .set("prescribed positions", h.0, params, |p, label| {
-                p.validate(label)
-            })
+            .set("prescribed positions", h.0, params, |p, label| p.validate(label))
     }
 
     /// Targets of the group become `R·p + t` for the reference positions `p` (positions when the
@@ -188,18 +185,12 @@ impl PrescribedPositions {
         angle_deg: f64,
         axis: Vector3<f64>,
     ) -> Result<()> {
-        let rotation =
-            Rotation3::from_axis_angle(&Unit::new_normalize(axis), angle_deg.to_radians());
+        let rotation = Rotation3::from_axis_angle(&Unit::new_normalize(axis), angle_deg.to_radians());
         self.set_transform(h, translation_m, rotation)
     }
 
     /// Set the target of the `i`-th node of the group.
-    pub fn set_target(
-        &mut self,
-        h: PrescribedHandle,
-        i: usize,
-        target_m: Vector3<f64>,
-    ) -> Result<()> {
+    pub fn set_target(&mut self, h: PrescribedHandle, i: usize, target_m: Vector3<f64>) -> Result<()> {
         let g = self.groups.check("prescribed positions", h.0)?;
         let r = self.ranges[g].clone();
         if i >= r.len() {
@@ -251,21 +242,10 @@ impl Potential<1> for PrescribedPositions {
         let k = self.groups.params[self.group[e] as usize].stiffness;
         prescribed_energy(x, &[t.x, t.y, t.z, k].map(S::constant))
     }
-    fn derivatives(
-        &self,
-        e: usize,
-        stencil: &Stencil<1>,
-        _project: bool,
-        out: &mut HyperDual<1>,
-    ) -> FastDerivatives {
+    fn derivatives(&self, e: usize, stencil: &Stencil<1>, _project: bool, out: &mut HyperDual<1>) -> FastDerivatives {
         let t = self.target[e];
         let k = self.groups.params[self.group[e] as usize].stiffness;
-        run_kernel(
-            generated::prescribed_position,
-            &stencil.x,
-            &[t.x, t.y, t.z, k],
-            out,
-        )
+        run_kernel(generated::prescribed_position, &stencil.x, &[t.x, t.y, t.z, k], out)
     }
     fn topology_version(&self) -> u64 {
         self.version
@@ -344,10 +324,7 @@ mod tests {
         assert!((t[1] - Vector3::new(0.0, 1.0, 1.0)).norm() < 1e-12);
         assert_derivatives(&pp, &st.eval(), 1e-6);
         // Far from target: hardened and retried.
-        assert!(matches!(
-            pp.check_converged_step(&st.eval()),
-            StepCheck::Retry(_)
-        ));
+        assert!(matches!(pp.check_converged_step(&st.eval()), StepCheck::Retry(_)));
         assert_eq!(pp.params(h).unwrap().stiffness, 2e5);
         let (_, n) = pp
             .add_in_box(

@@ -8,10 +8,7 @@
 
 use super::{globalize, Groups, NodeSetHandle};
 use crate::energy::symbolic::KernelSpec;
-use crate::energy::{
-    points_from_flat, run_kernel, FastDerivatives, HyperDual, Node, Potential, Scalar, Stencil,
-    Vec3,
-};
+use crate::energy::{points_from_flat, run_kernel, FastDerivatives, HyperDual, Node, Potential, Scalar, Stencil, Vec3};
 use crate::error::{check_param, Result, StarkError};
 use crate::generated;
 use crate::state::NodeArrays;
@@ -124,12 +121,7 @@ pub fn segment_energy<S: Scalar>(x: &[Vec3<S>; 2], p: &[S]) -> S {
     let over = strain - p[4];
     p[1] * strain.sq() * 0.5
         + p[2] * (strain - p[3]).sq() * 0.5
-        + S::select_gt(
-            over,
-            S::zero(),
-            || p[5] * over.powi(3) * (1.0 / 3.0),
-            S::zero,
-        )
+        + S::select_gt(over, S::zero(), || p[5] * over.powi(3) * (1.0 / 3.0), S::zero)
 }
 
 /// Generated kernel.
@@ -179,11 +171,7 @@ impl SegmentStrain {
     }
 
     /// Change the parameters of a group.
-    pub fn set_params(
-        &mut self,
-        h: SegmentStrainHandle,
-        params: SegmentStrainParams,
-    ) -> Result<()> {
+    pub fn set_params(&mut self, h: SegmentStrainHandle, params: SegmentStrainParams) -> Result<()> {
         self.groups
             .set("segment strain", h.0, params, |p, label| p.validate(label))
     }
@@ -217,13 +205,7 @@ impl Potential<2> for SegmentStrain {
     fn energy<S: Scalar>(&self, e: usize, x: &[Vec3<S>; 2], stencil: &Stencil<2>) -> S {
         segment_energy(x, &self.kernel_params(e, stencil).map(S::constant))
     }
-    fn derivatives(
-        &self,
-        e: usize,
-        stencil: &Stencil<2>,
-        _project: bool,
-        out: &mut HyperDual<2>,
-    ) -> FastDerivatives {
+    fn derivatives(&self, e: usize, stencil: &Stencil<2>, _project: bool, out: &mut HyperDual<2>) -> FastDerivatives {
         run_kernel(
             generated::segment_strain,
             &stencil.x,

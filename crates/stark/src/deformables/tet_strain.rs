@@ -19,9 +19,7 @@
 use super::{globalize, Groups, NodeSetHandle};
 use crate::energy::deformation::{deformation_gradient, gradient_weights, map_to_nodes};
 use crate::energy::symbolic::{KernelSpec, Sym};
-use crate::energy::{
-    FastDerivatives, HyperDual, Mat, Mat3, Node, Potential, Scalar, Stencil, Vec3,
-};
+use crate::energy::{FastDerivatives, HyperDual, Mat, Mat3, Node, Potential, Scalar, Stencil, Vec3};
 use crate::error::{check_param, Result, StarkError};
 use crate::generated;
 use crate::state::NodeArrays;
@@ -114,10 +112,7 @@ impl TetStrainParams {
     /// Lamé parameters `(μ, λ)` in Pa.
     pub fn lame(&self) -> (f64, f64) {
         let (e, nu) = (self.youngs_modulus, self.poissons_ratio);
-        (
-            e / (2.0 * (1.0 + nu)),
-            e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)),
-        )
+        (e / (2.0 * (1.0 + nu)), e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)))
     }
 }
 
@@ -174,14 +169,9 @@ pub fn tet_psi<S: Scalar>(f: &Mat3<S>, p: &[S], damped: bool, limiting: Limiting
     let (volume, mu_, lambda_, alpha) = (p[0], p[1], p[2], p[3]);
     let ic = f.frobenius_norm_sq();
     let j = f.det();
-    let mut psi =
-        mu_ * (ic - 3.0) * 0.5 + lambda_ * (j - alpha).sq() * 0.5 - mu_ * (ic + 1.0).ln() * 0.5;
+    let mut psi = mu_ * (ic - 3.0) * 0.5 + lambda_ * (j - alpha).sq() * 0.5 - mu_ * (ic + 1.0).ln() * 0.5;
     if damped || limiting != Limiting::Off {
-        let e = f
-            .transpose()
-            .mul_mat(f)
-            .sub_identity(1.0)
-            .scale(S::constant(0.5));
+        let e = f.transpose().mul_mat(f).sub_identity(1.0).scale(S::constant(0.5));
         if damped {
             let e0 = [[p[5], p[8], p[10]], [p[8], p[6], p[9]], [p[10], p[9], p[7]]];
             psi += p[4] * e.sub(&Mat(e0)).frobenius_norm_sq() * 0.5;
@@ -191,9 +181,7 @@ pub fn tet_psi<S: Scalar>(f: &Mat3<S>, p: &[S], damped: bool, limiting: Limiting
         match limiting {
             Limiting::Off => {}
             Limiting::Active => psi += k * over.powi(3) * (1.0 / 3.0),
-            Limiting::Branch => {
-                psi += S::select_gt(over, S::zero(), || k * over.powi(3) * (1.0 / 3.0), S::zero)
-            }
+            Limiting::Branch => psi += S::select_gt(over, S::zero(), || k * over.powi(3) * (1.0 / 3.0), S::zero),
         }
     }
     volume * psi
@@ -251,10 +239,7 @@ impl TetStrain {
             let x = t.map(|i| nodes.rest[i as usize]);
             let dm = Matrix3::from_columns(&[x[1] - x[0], x[2] - x[0], x[3] - x[0]]);
             let volume = dm.determinant() / 6.0;
-            let size = (x[1] - x[0])
-                .norm()
-                .max((x[2] - x[0]).norm())
-                .max((x[3] - x[0]).norm());
+            let size = (x[1] - x[0]).norm().max((x[2] - x[0]).norm()).max((x[3] - x[0]).norm());
             if !(volume > 1e-14 * size.powi(3)) {
                 let detail = if volume < 0.0 {
                     format!("rest volume {volume:e} m³ is negative (inverted tet: swap two nodes)")
@@ -287,8 +272,7 @@ impl TetStrain {
 
     /// Change the parameters of a group (validated).
     pub fn set_params(&mut self, h: TetStrainHandle, params: TetStrainParams) -> Result<()> {
-        self.groups
-            .set("tet strain", h.0, params, |p, label| p.validate(label))
+        self.groups.set("tet strain", h.0, params, |p, label| p.validate(label))
     }
 
     /// Number of tets with an inverted or flat current configuration (`det F ≤ 0`) at positions `x`.
@@ -354,13 +338,7 @@ impl Potential<4> for TetStrain {
         let (p, _) = self.kernel_params(e, stencil);
         tet_energy(x, &p.map(S::constant))
     }
-    fn derivatives(
-        &self,
-        e: usize,
-        stencil: &Stencil<4>,
-        project: bool,
-        out: &mut HyperDual<4>,
-    ) -> FastDerivatives {
+    fn derivatives(&self, e: usize, stencil: &Stencil<4>, project: bool, out: &mut HyperDual<4>) -> FastDerivatives {
         let (p, damped) = self.kernel_params(e, stencil);
         let dm_inv = [[p[0], p[1], p[2]], [p[3], p[4], p[5]], [p[6], p[7], p[8]]];
         let w = gradient_weights::<4, 3>(&dm_inv);
@@ -432,8 +410,7 @@ mod tests {
             strain_limit_stiffness: 1e5,
             ..Default::default()
         };
-        tets.add(&nodes, set, "t", &[[0, 1, 2, 3]], p.clone())
-            .unwrap();
+        tets.add(&nodes, set, "t", &[[0, 1, 2, 3]], p.clone()).unwrap();
         tets.add(
             &nodes,
             set,
@@ -477,11 +454,7 @@ mod tests {
         let eval = st.eval();
         let stencil = Stencil::new(tets.nodes(1), &eval);
         let d = crate::energy::potential::dual_derivatives(&tets, 1, &stencil);
-        assert!(
-            d.gradient_flat().iter().all(|g| g.abs() < 1e-10),
-            "{:?}",
-            d.grad
-        );
+        assert!(d.gradient_flat().iter().all(|g| g.abs() < 1e-10), "{:?}", d.grad);
     }
 
     #[test]
@@ -495,19 +468,10 @@ mod tests {
         };
         let mut tets = TetStrain::default();
         let err = tets
-            .add(
-                &nodes,
-                set,
-                "cup",
-                &[[0, 2, 1, 3]],
-                TetStrainParams::default(),
-            )
+            .add(&nodes, set, "cup", &[[0, 2, 1, 3]], TetStrainParams::default())
             .unwrap_err()
             .to_string();
-        assert!(
-            err.contains("tet 0 of 'cup'") && err.contains("negative"),
-            "{err}"
-        );
+        assert!(err.contains("tet 0 of 'cup'") && err.contains("negative"), "{err}");
         let flat = [
             Vector3::zeros(),
             Vector3::x(),
@@ -520,13 +484,7 @@ mod tests {
             len: 4,
         };
         let err = tets
-            .add(
-                &nodes,
-                set2,
-                "flat",
-                &[[0, 1, 2, 3]],
-                TetStrainParams::default(),
-            )
+            .add(&nodes, set2, "flat", &[[0, 1, 2, 3]], TetStrainParams::default())
             .unwrap_err()
             .to_string();
         assert!(err.contains("zero or degenerate"), "{err}");
@@ -549,13 +507,7 @@ mod tests {
             .to_string()
             .contains("must be positive"));
         let err = tets
-            .add(
-                &nodes,
-                set,
-                "cube",
-                &[[0, 1, 2, 7]],
-                TetStrainParams::default(),
-            )
+            .add(&nodes, set, "cube", &[[0, 1, 2, 7]], TetStrainParams::default())
             .unwrap_err()
             .to_string();
         assert!(err.contains("refers to node 7"), "{err}");

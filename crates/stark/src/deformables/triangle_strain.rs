@@ -16,9 +16,7 @@
 use super::{globalize, Groups, NodeSetHandle};
 use crate::energy::deformation::{deformation_gradient, gradient_weights, map_to_nodes};
 use crate::energy::symbolic::{KernelSpec, Sym};
-use crate::energy::{
-    FastDerivatives, HyperDual, Mat, Mat2, Mat32, Node, Potential, Scalar, Stencil, Vec3,
-};
+use crate::energy::{FastDerivatives, HyperDual, Mat, Mat2, Mat32, Node, Potential, Scalar, Stencil, Vec3};
 use crate::error::{check_param, Result, StarkError};
 use crate::generated;
 use crate::state::NodeArrays;
@@ -180,8 +178,7 @@ pub enum Limiting {
 fn both_over_cubed<S: Scalar>(e: &Mat2<S>, limit: S) -> S {
     let t = e.trace();
     let d = e.det();
-    (t.powi(3) - t * d * 3.0) - limit * (t.sq() - d * 2.0) * 3.0 + limit.sq() * t * 3.0
-        - limit.powi(3) * 2.0
+    (t.powi(3) - t * d * 3.0) - limit * (t.sq() - d * 2.0) * 3.0 + limit.sq() * t * 3.0 - limit.powi(3) * 2.0
 }
 
 /// Energy `h A ψ(F)` of one triangle given its 3×2 deformation gradient (J).
@@ -194,10 +191,7 @@ pub fn triangle_psi<S: Scalar>(f: &Mat32<S>, p: &[S], damped: bool, limiting: Li
     if damped || limiting != Limiting::Off {
         let e = c.sub_identity(1.0).scale(S::constant(0.5));
         if damped {
-            psi += p[3]
-                * e.sub(&Mat([[p[4], p[6]], [p[6], p[5]]]))
-                    .frobenius_norm_sq()
-                * 0.5;
+            psi += p[3] * e.sub(&Mat([[p[4], p[6]], [p[6], p[5]]])).frobenius_norm_sq() * 0.5;
         }
         let (limit, k) = (p[7], p[8]);
         let third = 1.0 / 3.0;
@@ -231,12 +225,7 @@ pub fn triangle_psi<S: Scalar>(f: &Mat32<S>, p: &[S], damped: bool, limiting: Li
 pub fn triangle_energy<S: Scalar>(x: &[Vec3<S>; 3], p: &[S]) -> S {
     let ds = Mat32::from_columns3([x[1] - x[0], x[2] - x[0]]);
     let dm_inv: Mat2<S> = Mat([[p[0], p[1]], [p[2], p[3]]]);
-    let psi = triangle_psi(
-        &ds.mul_mat(&dm_inv),
-        &p[4..4 + PSI_PARAMS],
-        true,
-        Limiting::Branch,
-    );
+    let psi = triangle_psi(&ds.mul_mat(&dm_inv), &p[4..4 + PSI_PARAMS], true, Limiting::Branch);
     let force = Vec3([p[13], p[14], p[15]]);
     psi - (x[0] + x[1] + x[2]).dot(&force) * (1.0 / 3.0)
 }
@@ -297,10 +286,7 @@ impl TriangleStrain {
         let mut rest = Vec::with_capacity(global.len());
         for (index, t) in global.iter().enumerate() {
             let x = t.map(|i| nodes.rest[i as usize]);
-            let longest = (x[1] - x[0])
-                .norm()
-                .max((x[2] - x[0]).norm())
-                .max((x[2] - x[1]).norm());
+            let longest = (x[1] - x[0]).norm().max((x[2] - x[0]).norm()).max((x[2] - x[1]).norm());
             let area = 0.5 * (x[1] - x[0]).cross(&(x[2] - x[0])).norm();
             if !(area > 1e-12 * longest * longest) {
                 return Err(StarkError::BadElement {
@@ -331,11 +317,7 @@ impl TriangleStrain {
     }
 
     /// Change the parameters of a group.
-    pub fn set_params(
-        &mut self,
-        h: TriangleStrainHandle,
-        params: TriangleStrainParams,
-    ) -> Result<()> {
+    pub fn set_params(&mut self, h: TriangleStrainHandle, params: TriangleStrainParams) -> Result<()> {
         self.groups
             .set("triangle strain", h.0, params, |p, label| p.validate(label))
     }
@@ -392,13 +374,7 @@ impl Potential<3> for TriangleStrain {
         let (p, _) = self.kernel_params(e, stencil);
         triangle_energy(x, &p.map(S::constant))
     }
-    fn derivatives(
-        &self,
-        e: usize,
-        stencil: &Stencil<3>,
-        project: bool,
-        out: &mut HyperDual<3>,
-    ) -> FastDerivatives {
+    fn derivatives(&self, e: usize, stencil: &Stencil<3>, project: bool, out: &mut HyperDual<3>) -> FastDerivatives {
         let (p, damped) = self.kernel_params(e, stencil);
         let w = gradient_weights::<3, 2>(&[[p[0], p[1]], [p[2], p[3]]]);
         let mut f = [0.0; 6];
@@ -423,9 +399,7 @@ impl Potential<3> for TriangleStrain {
         let mut h = [0.0; 36];
         let value = match (limiting, damped) {
             (Limiting::Both, _) => generated::triangle_psi_limited_both(&f, psi, &mut g, &mut h),
-            (Limiting::Largest, _) => {
-                generated::triangle_psi_limited_largest(&f, psi, &mut g, &mut h)
-            }
+            (Limiting::Largest, _) => generated::triangle_psi_limited_largest(&f, psi, &mut g, &mut h),
             (_, true) => generated::triangle_psi_damped(&f, psi, &mut g, &mut h),
             (_, false) => generated::triangle_psi_elastic(&f, psi, &mut g, &mut h),
         };
@@ -493,8 +467,7 @@ mod tests {
                     inflation_pa: 30.0,
                     ..Default::default()
                 };
-                tris.add(&st.nodes, set, "cloth", &[[0, 1, 2]], full)
-                    .unwrap();
+                tris.add(&st.nodes, set, "cloth", &[[0, 1, 2]], full).unwrap();
                 tris.add(
                     &st.nodes,
                     set,
@@ -527,13 +500,7 @@ mod tests {
             len: 3,
         };
         let err = TriangleStrain::default()
-            .add(
-                &st.nodes,
-                set,
-                "sheet",
-                &[[0, 1, 2]],
-                TriangleStrainParams::default(),
-            )
+            .add(&st.nodes, set, "sheet", &[[0, 1, 2]], TriangleStrainParams::default())
             .unwrap_err();
         assert!(err.to_string().contains("triangle 0 of 'sheet'"), "{err}");
         let bad = TriangleStrainParams {

@@ -79,9 +79,7 @@ pub struct Assembler {
 
 fn slot_of(matrix: &BlockSparseMatrix, r: u32, c: u32) -> u32 {
     let row = matrix.row_start[r as usize]..matrix.row_start[r as usize + 1];
-    let k = matrix.cols[row.clone()]
-        .binary_search(&c)
-        .expect("block in pattern");
+    let k = matrix.cols[row.clone()].binary_search(&c).expect("block in pattern");
     (row.start + k) as u32
 }
 
@@ -142,9 +140,7 @@ impl Assembler {
             }
             for start in (0..n).step_by(CHUNK) {
                 let end = (start + CHUNK).min(n);
-                let blocks = layout.stencils[start * m..end * m]
-                    .iter()
-                    .filter(|&&r| r != NO_DOF);
+                let blocks = layout.stencils[start * m..end * m].iter().filter(|&&r| r != NO_DOF);
                 let mask = blocks.clone().fold(0u64, |acc, &r| acc | used[r as usize]);
                 let color = mask.trailing_ones() as usize;
                 let range = (start as u32, end as u32);
@@ -167,8 +163,7 @@ impl Assembler {
             .map(|&(r, c)| (r > c).then(|| slot_of(&matrix, c, r)))
             .collect();
 
-        let same_pattern =
-            matrix.row_start == self.matrix.row_start && matrix.cols == self.matrix.cols;
+        let same_pattern = matrix.row_start == self.matrix.row_start && matrix.cols == self.matrix.cols;
         if !same_pattern || self.pattern_id == 0 {
             self.pattern_id = NEXT_PATTERN_ID.fetch_add(1, Ordering::Relaxed);
         }

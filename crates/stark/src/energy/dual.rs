@@ -52,10 +52,7 @@ impl<const N: usize> HyperDual<N> {
     }
     #[inline(always)]
     fn h_mut(&mut self) -> &mut [f64] {
-        self.hess
-            .as_flattened_mut()
-            .as_flattened_mut()
-            .as_flattened_mut()
+        self.hess.as_flattened_mut().as_flattened_mut().as_flattened_mut()
     }
 
     /// Gradient as a flat slice of length `3N`.
@@ -297,12 +294,7 @@ impl<const N: usize> Scalar for HyperDual<N> {
         let r = 1.0 / self.value;
         self.chain(r, -r * r, 2.0 * r * r * r)
     }
-    fn select_gt(
-        a: Self,
-        b: Self,
-        then: impl FnOnce() -> Self,
-        otherwise: impl FnOnce() -> Self,
-    ) -> Self {
+    fn select_gt(a: Self, b: Self, then: impl FnOnce() -> Self, otherwise: impl FnOnce() -> Self) -> Self {
         if a.value > b.value {
             then()
         } else {
@@ -317,11 +309,7 @@ mod tests {
 
     /// f(x, y, z) = x² y + sin(z) · ln(y) / x + atan2(y, z) + sqrt(x·z)
     fn f<S: Scalar>(x: S, y: S, z: S) -> S {
-        x * x * y
-            + z.sin() * y.ln() / x
-            + y.atan2(z)
-            + (x * z).sqrt()
-            + x.powi(3).acos().exp() * 0.1
+        x * x * y + z.sin() * y.ln() / x + y.atan2(z) + (x * z).sqrt() + x.powi(3).acos().exp() * 0.1
     }
 
     #[test]
@@ -339,10 +327,7 @@ mod tests {
             a[i] += h;
             b[i] -= h;
             let fd = (fe(a) - fe(b)) / (2.0 * h);
-            assert!(
-                (fd - r.grad[0][i]).abs() < 1e-8 * (1.0 + fd.abs()),
-                "grad {i}"
-            );
+            assert!((fd - r.grad[0][i]).abs() < 1e-8 * (1.0 + fd.abs()), "grad {i}");
             for j in 0..3 {
                 let fd2 = {
                     let g = |q: [f64; 3]| {
@@ -351,10 +336,7 @@ mod tests {
                     };
                     (g(a) - g(b)) / (2.0 * h)
                 };
-                assert!(
-                    (fd2 - hess[i * 3 + j]).abs() < 1e-6 * (1.0 + fd2.abs()),
-                    "hess {i}{j}"
-                );
+                assert!((fd2 - hess[i * 3 + j]).abs() < 1e-6 * (1.0 + fd2.abs()), "hess {i}{j}");
             }
         }
     }

@@ -128,11 +128,7 @@ pub trait Potential<const N: usize>: Send + Sync {
 
 /// Value, gradient and Hessian of element `e` with respect to its node positions, by hyper-duals
 /// (the oracle) — both Hessian triangles filled.
-pub fn dual_derivatives<P: Potential<N>, const N: usize>(
-    p: &P,
-    e: usize,
-    stencil: &Stencil<N>,
-) -> HyperDual<N> {
+pub fn dual_derivatives<P: Potential<N>, const N: usize>(p: &P, e: usize, stencil: &Stencil<N>) -> HyperDual<N> {
     let xs = HyperDual::<N>::variables(&stencil.x);
     let mut d = p.energy(e, &xs, stencil);
     symmetrize(&mut d);
@@ -155,10 +151,7 @@ pub fn run_kernel<const N: usize>(
         &flat[..3 * N],
         params,
         out.grad.as_flattened_mut(),
-        out.hess
-            .as_flattened_mut()
-            .as_flattened_mut()
-            .as_flattened_mut(),
+        out.hess.as_flattened_mut().as_flattened_mut().as_flattened_mut(),
     );
     FastDerivatives::Exact
 }
@@ -185,11 +178,7 @@ pub fn element_derivatives<P: Potential<N>, const N: usize>(
 /// Copy the upper triangle of a hyper-dual Hessian to the lower.
 pub fn symmetrize<const N: usize>(d: &mut HyperDual<N>) {
     let n = 3 * N;
-    let h = d
-        .hess
-        .as_flattened_mut()
-        .as_flattened_mut()
-        .as_flattened_mut();
+    let h = d.hess.as_flattened_mut().as_flattened_mut().as_flattened_mut();
     for i in 0..n {
         for j in 0..i {
             h[i * n + j] = h[j * n + i];
@@ -271,11 +260,7 @@ impl<P: Potential<N>, const N: usize> EnergyTerm for PotentialTerm<P, N> {
         let projected = element_derivatives(&self.potential, e, &stencil, project, &mut d);
         // Deformable map: ∂x/∂v = dt·I, so ∇ᵥ = dt ∇ₓ and Hᵥ = dt² Hₓ (projection commutes with
         // the positive scaling).
-        let h = d
-            .hess
-            .as_flattened_mut()
-            .as_flattened_mut()
-            .as_flattened_mut();
+        let h = d.hess.as_flattened_mut().as_flattened_mut().as_flattened_mut();
         if project && !projected {
             project_psd(h, n);
         }

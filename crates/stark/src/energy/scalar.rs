@@ -71,12 +71,7 @@ pub trait Scalar:
     /// Numeric scalars evaluate only the branch taken; the symbolic scalar records both and a
     /// conditional node. Both branches must therefore be safe to *trace*; the one not taken may be
     /// non-finite at the evaluation point (it is discarded).
-    fn select_gt(
-        a: Self,
-        b: Self,
-        then: impl FnOnce() -> Self,
-        otherwise: impl FnOnce() -> Self,
-    ) -> Self;
+    fn select_gt(a: Self, b: Self, then: impl FnOnce() -> Self, otherwise: impl FnOnce() -> Self) -> Self;
     /// `max(a, 0)` written with [`Scalar::select_gt`].
     fn positive_part(self) -> Self {
         Self::select_gt(self, Self::zero(), || self, Self::zero)
@@ -125,12 +120,7 @@ impl Scalar for f64 {
         f64::recip(self)
     }
     #[inline(always)]
-    fn select_gt(
-        a: Self,
-        b: Self,
-        then: impl FnOnce() -> Self,
-        otherwise: impl FnOnce() -> Self,
-    ) -> Self {
+    fn select_gt(a: Self, b: Self, then: impl FnOnce() -> Self, otherwise: impl FnOnce() -> Self) -> Self {
         if a > b {
             then()
         } else {

@@ -570,12 +570,7 @@ impl Scalar for Sym {
     fn recip(self) -> Self {
         Sym(with_graph(|g| g.recip(self.0)))
     }
-    fn select_gt(
-        a: Self,
-        b: Self,
-        then: impl FnOnce() -> Self,
-        otherwise: impl FnOnce() -> Self,
-    ) -> Self {
+    fn select_gt(a: Self, b: Self, then: impl FnOnce() -> Self, otherwise: impl FnOnce() -> Self) -> Self {
         let t = then();
         let e = otherwise();
         Sym(with_graph(|g| g.select_gt(a.0, b.0, t.0, e.0)))
@@ -715,10 +710,7 @@ fn emit(g: &Graph, spec: &KernelSpec, value: Id, grad: &[Id], hess: &[Vec<Id>]) 
         "pub fn {}(x: &[f64], p: &[f64], grad: &mut [f64], hess: &mut [f64]) -> f64 {{",
         spec.name
     );
-    let _ = writeln!(
-        out,
-        "    let x: &[f64; {n}] = x.try_into().expect(\"input length\");"
-    );
+    let _ = writeln!(out, "    let x: &[f64; {n}] = x.try_into().expect(\"input length\");");
     if spec.n_params > 0 {
         let _ = writeln!(
             out,
@@ -834,10 +826,7 @@ mod tests {
             n_params: 2,
             energy: |x, p| f(x, p),
         };
-        for (x, p) in [
-            ([0.7, 1.3, -0.4], [0.2, 1.5]),
-            ([1.1, -0.9, 0.6], [-2.0, 0.5]),
-        ] {
+        for (x, p) in [([0.7, 1.3, -0.4], [0.2, 1.5]), ([1.1, -0.9, 0.6], [-2.0, 0.5])] {
             let (v, g, h) = evaluate(&spec, &x, &p);
             let xd: Vec<HyperDual<1>> = (0..3).map(|i| HyperDual::variable(x[i], 0, i)).collect();
             let pd: Vec<HyperDual<1>> = p.iter().map(|&c| HyperDual::constant(c)).collect();
@@ -872,16 +861,12 @@ mod tests {
             n_params: 0,
             energy: |x, _| {
                 let r = (x[1] * x[1] + x[2] * x[2]).sqrt();
-                x[0] * x[0] * x[1]
-                    + Sym::select_gt(r, Sym::constant(1.0), || (r - 1.0).powi(3), Sym::zero)
+                x[0] * x[0] * x[1] + Sym::select_gt(r, Sym::constant(1.0), || (r - 1.0).powi(3), Sym::zero)
             },
         };
         let (v, g, h) = evaluate(&spec, &[0.5, 0.0, 0.0], &[]);
         assert_eq!(v, 0.0);
-        assert!(
-            g.iter().chain(h.iter()).all(|x| x.is_finite()),
-            "{g:?} {h:?}"
-        );
+        assert!(g.iter().chain(h.iter()).all(|x| x.is_finite()), "{g:?} {h:?}");
         assert!((g[1] - 0.25).abs() < 1e-15 && (h[1] - 1.0).abs() < 1e-15);
     }
 

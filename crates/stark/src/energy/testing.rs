@@ -64,12 +64,7 @@ impl TestState {
 }
 
 fn rel_err(a: &[f64], b: &[f64]) -> f64 {
-    let diff: f64 = a
-        .iter()
-        .zip(b)
-        .map(|(x, y)| (x - y) * (x - y))
-        .sum::<f64>()
-        .sqrt();
+    let diff: f64 = a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum::<f64>().sqrt();
     let scale: f64 = b
         .iter()
         .map(|y| y * y)
@@ -85,11 +80,7 @@ fn rel_err(a: &[f64], b: &[f64]) -> f64 {
 
 /// Largest relative errors over all elements of `p`: `(gradient vs FD of the energy, Hessian vs
 /// FD of the exact gradient, fast path vs hyper-duals)`. The step is `step_m` (m).
-pub fn derivative_errors<P: Potential<N>, const N: usize>(
-    p: &P,
-    state: &EvalState,
-    step_m: f64,
-) -> (f64, f64, f64) {
+pub fn derivative_errors<P: Potential<N>, const N: usize>(p: &P, state: &EvalState, step_m: f64) -> (f64, f64, f64) {
     let n = 3 * N;
     let (mut eg, mut eh, mut ef) = (0.0f64, 0.0f64, 0.0f64);
     for e in 0..p.num_elements() {

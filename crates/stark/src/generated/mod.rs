@@ -16,14 +16,11 @@ pub use kernels::*;
 /// Every generated kernel, in file order.
 pub fn specs() -> Vec<KernelSpec> {
     use crate::deformables::*;
-    let mut specs = vec![
-        inertia::KERNEL,
-        prescribed_positions::KERNEL,
-        segment_strain::KERNEL,
-    ];
+    let mut specs = vec![inertia::KERNEL, prescribed_positions::KERNEL, segment_strain::KERNEL];
     specs.extend(triangle_strain::kernels());
     specs.extend([flat_bending::KERNEL, dihedral_bending::KERNEL]);
     specs.extend(tet_strain::kernels());
+    specs.extend(crate::contact::pairs::kernels());
     specs.extend([
         attachments::POINT_POINT_KERNEL,
         attachments::POINT_EDGE_KERNEL,

@@ -246,11 +246,7 @@ pub fn vertex_aabbs(positions: &[Vector3<f64>], radius: f64) -> Vec<Aabb> {
 ///
 /// # Errors
 /// [`GeometryError::VertexIndexOutOfRange`] if an edge refers to a missing vertex.
-pub fn edge_aabbs(
-    positions: &[Vector3<f64>],
-    edges: &[[usize; 2]],
-    radius: f64,
-) -> Result<Vec<Aabb>, GeometryError> {
+pub fn edge_aabbs(positions: &[Vector3<f64>], edges: &[[usize; 2]], radius: f64) -> Result<Vec<Aabb>, GeometryError> {
     check_indices("edge", edges, positions.len())?;
     Ok(edges
         .iter()
@@ -326,11 +322,7 @@ pub fn triangle_swept_aabbs(
     let (x0, x1) = (positions_t0, positions_t1);
     Ok(triangles
         .iter()
-        .map(|t| {
-            triangle_swept_aabb(
-                &x0[t[0]], &x0[t[1]], &x0[t[2]], &x1[t[0]], &x1[t[1]], &x1[t[2]], radius,
-            )
-        })
+        .map(|t| triangle_swept_aabb(&x0[t[0]], &x0[t[1]], &x0[t[2]], &x1[t[0]], &x1[t[1]], &x1[t[2]], radius))
         .collect())
 }
 
@@ -344,12 +336,7 @@ mod tests {
 
     #[test]
     fn construction_union_and_overlap() {
-        let a = triangle_aabb(
-            &v(0.0, 0.0, 0.0),
-            &v(1.0, 2.0, 0.0),
-            &v(-1.0, 0.5, 3.0),
-            0.0,
-        );
+        let a = triangle_aabb(&v(0.0, 0.0, 0.0), &v(1.0, 2.0, 0.0), &v(-1.0, 0.5, 3.0), 0.0);
         assert_eq!(a.min, v(-1.0, 0.0, 0.0));
         assert_eq!(a.max, v(1.0, 2.0, 3.0));
         assert!(!a.is_empty());

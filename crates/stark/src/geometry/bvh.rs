@@ -153,10 +153,7 @@ fn refit_subtree(nodes: &mut [Node], boxes: &[Aabb]) {
     let (head, rest) = nodes.split_at_mut(1);
     let (left, right) = rest.split_at_mut(right_offset - 1);
     if head[0].leaves > PARALLEL_LEAVES {
-        rayon::join(
-            || refit_subtree(left, boxes),
-            || refit_subtree(right, boxes),
-        );
+        rayon::join(|| refit_subtree(left, boxes), || refit_subtree(right, boxes));
     } else {
         refit_subtree(left, boxes);
         refit_subtree(right, boxes);
@@ -316,12 +313,7 @@ impl Bvh {
         let (l, r) = (node + 1, node + n.index);
         if n.leaves > PARALLEL_LEAVES {
             let ((a, b), c) = rayon::join(
-                || {
-                    rayon::join(
-                        || self.self_traverse(l, margin),
-                        || self.self_traverse(r, margin),
-                    )
-                },
+                || rayon::join(|| self.self_traverse(l, margin), || self.self_traverse(r, margin)),
                 || cross_traverse(self, l, self, r, margin, true),
             );
             merge(merge(a, b), c)
@@ -353,14 +345,7 @@ fn merge(mut a: PairsAndTests, b: PairsAndTests) -> PairsAndTests {
 
 /// Pairs between subtree `a` of tree `ta` and subtree `b` of tree `tb`; in parallel for large
 /// subtrees. With `ordered`, pairs are reported as `(min, max)` (self-collision).
-fn cross_traverse(
-    ta: &Bvh,
-    a: usize,
-    tb: &Bvh,
-    b: usize,
-    margin: f64,
-    ordered: bool,
-) -> PairsAndTests {
+fn cross_traverse(ta: &Bvh, a: usize, tb: &Bvh, b: usize, margin: f64, ordered: bool) -> PairsAndTests {
     let (na, nb) = (&ta.nodes[a], &tb.nodes[b]);
     if na.leaves + nb.leaves <= PARALLEL_LEAVES {
         let mut out = (Vec::new(), 0);
@@ -386,15 +371,7 @@ fn cross_traverse(
 }
 
 /// Sequential simultaneous traversal of subtree `a` of `ta` and subtree `b` of `tb`.
-fn cross_traverse_seq(
-    ta: &Bvh,
-    a: usize,
-    tb: &Bvh,
-    b: usize,
-    margin: f64,
-    ordered: bool,
-    out: &mut PairsAndTests,
-) {
+fn cross_traverse_seq(ta: &Bvh, a: usize, tb: &Bvh, b: usize, margin: f64, ordered: bool, out: &mut PairsAndTests) {
     let mut stack = Vec::with_capacity(128);
     stack.push((a, b));
     while let Some((a, b)) = stack.pop() {
@@ -440,11 +417,7 @@ mod tests {
     fn random_boxes(rng: &mut StdRng, n: usize, size: f64) -> Vec<Aabb> {
         (0..n)
             .map(|_| {
-                let c = Vector3::new(
-                    rng.random::<f64>(),
-                    rng.random::<f64>(),
-                    rng.random::<f64>(),
-                );
+                let c = Vector3::new(rng.random::<f64>(), rng.random::<f64>(), rng.random::<f64>());
                 let h = Vector3::new(
                     rng.random_range(0.0..size),
                     rng.random_range(0.0..size),
@@ -502,29 +475,16 @@ mod tests {
     #[test]
     fn matches_brute_force_on_random_scenes() {
         let mut rng = StdRng::seed_from_u64(10);
-        for &(n, size) in &[
-            (1usize, 0.1),
-            (2, 0.5),
-            (17, 0.2),
-            (300, 0.05),
-            (3000, 0.01),
-        ] {
+        for &(n, size) in &[(1usize, 0.1), (2, 0.5), (17, 0.2), (300, 0.05), (3000, 0.01)] {
             let boxes = random_boxes(&mut rng, n, size);
             let bvh = Bvh::build(&boxes);
             check_tree(&bvh, &boxes);
             for &r in &[0.0, 0.01] {
-                assert_eq!(
-                    bvh.self_pairs(r),
-                    brute_self_pairs(&boxes, r),
-                    "n = {n}, r = {r}"
-                );
+                assert_eq!(bvh.self_pairs(r), brute_self_pairs(&boxes, r), "n = {n}, r = {r}");
             }
             let others = random_boxes(&mut rng, n / 2 + 1, size);
             let other = Bvh::build(&others);
-            assert_eq!(
-                bvh.pairs_with(&other, 0.005),
-                brute_cross_pairs(&boxes, &others, 0.005)
-            );
+            assert_eq!(bvh.pairs_with(&other, 0.005), brute_cross_pairs(&boxes, &others, 0.005));
             for _ in 0..20 {
                 let q = random_boxes(&mut rng, 1, 0.2)[0];
                 let expected: Vec<usize> = (0..n).filter(|&i| boxes[i].intersects(&q)).collect();
@@ -586,10 +546,7 @@ mod tests {
     #[test]
     fn deterministic_across_thread_counts() {
         let boxes = random_boxes(&mut StdRng::seed_from_u64(13), 20_000, 0.004);
-        let one = rayon::ThreadPoolBuilder::new()
-            .num_threads(1)
-            .build()
-            .unwrap();
+        let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
         let (p1, t1) = one.install(|| Bvh::build(&boxes).self_pairs_counted(0.0));
         let (p2, t2) = Bvh::build(&boxes).self_pairs_counted(0.0);
         assert_eq!(p1, p2);
@@ -602,18 +559,8 @@ mod tests {
         let mut out = Vec::with_capacity(2 * n * n);
         for i in 0..n {
             for j in 0..n {
-                out.push(triangle_aabb(
-                    &x(i, j),
-                    &x(i + 1, j),
-                    &x(i + 1, j + 1),
-                    radius,
-                ));
-                out.push(triangle_aabb(
-                    &x(i, j),
-                    &x(i + 1, j + 1),
-                    &x(i, j + 1),
-                    radius,
-                ));
+                out.push(triangle_aabb(&x(i, j), &x(i + 1, j), &x(i + 1, j + 1), radius));
+                out.push(triangle_aabb(&x(i, j), &x(i + 1, j + 1), &x(i, j + 1), radius));
             }
         }
         out

@@ -10,9 +10,7 @@ use thiserror::Error;
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
 pub enum GeometryError {
     /// A primitive refers to a vertex that does not exist.
-    #[error(
-        "{primitive} {index} refers to vertex {vertex}, but there are only {num_vertices} vertices"
-    )]
+    #[error("{primitive} {index} refers to vertex {vertex}, but there are only {num_vertices} vertices")]
     VertexIndexOutOfRange {
         /// Kind of primitive (`"edge"`, `"triangle"`).
         primitive: &'static str,

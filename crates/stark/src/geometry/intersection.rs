@@ -26,11 +26,7 @@ use super::GeometryError;
 
 #[inline]
 fn c3(p: &Vector3<f64>) -> Coord3D<f64> {
-    Coord3D {
-        x: p.x,
-        y: p.y,
-        z: p.z,
-    }
+    Coord3D { x: p.x, y: p.y, z: p.z }
 }
 
 /// Exact sign of the orientation of `(a, b, c, d)` (`robust::orient3d`; positive when `d` lies
@@ -70,21 +66,14 @@ fn non_degenerate_axis(a: &Vector3<f64>, b: &Vector3<f64>, c: &Vector3<f64>) -> 
 
 /// Closed-interval overlap of collinear segments `[p0, p1]` and `[q0, q1]`, tested on the
 /// coordinate axis with the largest spread (which the common line projects onto one-to-one).
-fn collinear_overlap(
-    p0: &Vector3<f64>,
-    p1: &Vector3<f64>,
-    q0: &Vector3<f64>,
-    q1: &Vector3<f64>,
-) -> bool {
+fn collinear_overlap(p0: &Vector3<f64>, p1: &Vector3<f64>, q0: &Vector3<f64>, q1: &Vector3<f64>) -> bool {
     let pts = [p0, p1, q0, q1];
     let spread = |k: usize| {
         let lo = pts.iter().map(|p| p[k]).fold(f64::INFINITY, f64::min);
         let hi = pts.iter().map(|p| p[k]).fold(f64::NEG_INFINITY, f64::max);
         hi - lo
     };
-    let k = (0..3)
-        .max_by(|&i, &j| spread(i).total_cmp(&spread(j)))
-        .unwrap_or(0);
+    let k = (0..3).max_by(|&i, &j| spread(i).total_cmp(&spread(j))).unwrap_or(0);
     let (plo, phi) = (p0[k].min(p1[k]), p0[k].max(p1[k]));
     let (qlo, qhi) = (q0[k].min(q1[k]), q0[k].max(q1[k]));
     plo <= qhi && qlo <= phi
@@ -113,12 +102,7 @@ fn segments_intersect_2d(
 }
 
 /// Whether the closed segments `[p0, p1]` and `[q0, q1]` in 3D intersect (exact).
-fn segments_intersect_3d(
-    p0: &Vector3<f64>,
-    p1: &Vector3<f64>,
-    q0: &Vector3<f64>,
-    q1: &Vector3<f64>,
-) -> bool {
+fn segments_intersect_3d(p0: &Vector3<f64>, p1: &Vector3<f64>, q0: &Vector3<f64>, q1: &Vector3<f64>) -> bool {
     if orient3(p0, p1, q0, q1) != 0.0 {
         return false;
     }
@@ -167,10 +151,7 @@ pub fn edge_triangle_intersect(
     t1: &Vector3<f64>,
     t2: &Vector3<f64>,
 ) -> bool {
-    if ![e0, e1, t0, t1, t2]
-        .iter()
-        .all(|p| p.iter().all(|c| c.is_finite()))
-    {
+    if ![e0, e1, t0, t1, t2].iter().all(|p| p.iter().all(|c| c.is_finite())) {
         return true;
     }
     let Some(axis) = non_degenerate_axis(t0, t1, t2) else {
@@ -358,11 +339,7 @@ mod tests {
 
     /// Floating-point reference for generic configurations: returns `None` when the
     /// configuration is too close to a boundary case to trust the float answer.
-    fn float_reference(
-        e0: &Vector3<f64>,
-        e1: &Vector3<f64>,
-        t: &[Vector3<f64>; 3],
-    ) -> Option<bool> {
+    fn float_reference(e0: &Vector3<f64>, e1: &Vector3<f64>, t: &[Vector3<f64>; 3]) -> Option<bool> {
         let n = (t[1] - t[0]).cross(&(t[2] - t[0]));
         let s0 = n.dot(&(e0 - t[0]));
         let s1 = n.dot(&(e1 - t[0]));
@@ -451,14 +428,7 @@ mod tests {
         }
         let mut tets = Vec::new();
         // The 6 Kuhn tets share the cube diagonal 000–111; each follows one axis permutation.
-        let perms = [
-            [0, 1, 2],
-            [0, 2, 1],
-            [1, 0, 2],
-            [1, 2, 0],
-            [2, 0, 1],
-            [2, 1, 0],
-        ];
+        let perms = [[0, 1, 2], [0, 2, 1], [1, 0, 2], [1, 2, 0], [2, 0, 1], [2, 1, 0]];
         for i in 0..n {
             for j in 0..n {
                 for k in 0..n {
@@ -487,11 +457,7 @@ mod tests {
                 faces.entry(key).or_insert((0, f)).0 += 1;
             }
         }
-        let mut tris: Vec<[usize; 3]> = faces
-            .values()
-            .filter(|(c, _)| *c == 1)
-            .map(|(_, f)| *f)
-            .collect();
+        let mut tris: Vec<[usize; 3]> = faces.values().filter(|(c, _)| *c == 1).map(|(_, f)| *f).collect();
         tris.sort_unstable();
         let mut edges: Vec<[usize; 2]> = tris
             .iter()
@@ -503,11 +469,7 @@ mod tests {
         (x, edges, tris)
     }
 
-    fn brute_force(
-        x: &[Vector3<f64>],
-        edges: &[[usize; 2]],
-        tris: &[[usize; 3]],
-    ) -> Vec<(usize, usize)> {
+    fn brute_force(x: &[Vector3<f64>], edges: &[[usize; 2]], tris: &[[usize; 3]]) -> Vec<(usize, usize)> {
         let mut out = Vec::new();
         for (ei, e) in edges.iter().enumerate() {
             for (ti, t) in tris.iter().enumerate() {
@@ -563,8 +525,7 @@ mod tests {
                 )
             })
             .collect();
-        let mut pick =
-            |k: usize| -> Vec<usize> { (0..k).map(|_| rng.random_range(0..300)).collect() };
+        let mut pick = |k: usize| -> Vec<usize> { (0..k).map(|_| rng.random_range(0..300)).collect() };
         let tris: Vec<[usize; 3]> = (0..200)
             .map(|_| {
                 let p = pick(3);

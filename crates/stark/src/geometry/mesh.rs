@@ -78,9 +78,7 @@ pub enum MeshError {
         tolerance: f64,
     },
     /// A merge tolerance so small relative to the coordinates that grid cells overflow.
-    #[error(
-        "merge tolerance {tolerance:e} m is too small for coordinates of magnitude {magnitude:e} m"
-    )]
+    #[error("merge tolerance {tolerance:e} m is too small for coordinates of magnitude {magnitude:e} m")]
     ToleranceTooSmall {
         /// The rejected tolerance.
         tolerance: f64,
@@ -110,10 +108,7 @@ pub(crate) fn element_name(k: usize) -> &'static str {
 
 /// Checks that every index in `elements` is below `n_vertices` and that no element repeats a
 /// vertex. The error names the first offending element.
-pub fn check_indices<const K: usize>(
-    n_vertices: usize,
-    elements: &[[usize; K]],
-) -> Result<(), MeshError> {
+pub fn check_indices<const K: usize>(n_vertices: usize, elements: &[[usize; K]]) -> Result<(), MeshError> {
     let kind = element_name(K);
     for (element, e) in elements.iter().enumerate() {
         for (a, &vertex) in e.iter().enumerate() {
@@ -126,11 +121,7 @@ pub fn check_indices<const K: usize>(
                 });
             }
             if e[..a].contains(&vertex) {
-                return Err(MeshError::RepeatedVertex {
-                    kind,
-                    element,
-                    vertex,
-                });
+                return Err(MeshError::RepeatedVertex { kind, element, vertex });
             }
         }
     }
@@ -150,9 +141,7 @@ fn check_repeated<const K: usize>(elements: &[[usize; K]]) -> Result<(), MeshErr
 /// Returns the re-indexed elements and the map `new_to_old` (new vertex `i` is old vertex
 /// `new_to_old[i]`). New indices are assigned in order of first appearance while scanning the
 /// elements, exactly as Stark's `reduce_connectivity`.
-pub fn reduce_connectivity<const K: usize>(
-    elements: &[[usize; K]],
-) -> (Vec<[usize; K]>, Vec<usize>) {
+pub fn reduce_connectivity<const K: usize>(elements: &[[usize; K]]) -> (Vec<[usize; K]>, Vec<usize>) {
     let mut old_to_new: HashMap<usize, usize> = HashMap::new();
     let mut new_to_old = Vec::new();
     let reduced = elements
@@ -395,12 +384,7 @@ pub fn triangle_area(p0: &Vector3<f64>, p1: &Vector3<f64>, p2: &Vector3<f64>) ->
 
 /// Signed tet volume `((p1−p0)×(p2−p0))·(p3−p0)/6` in m³ (Stark's `signed_tetra_volume`,
 /// same expression); positive when `p3` lies on the side `(p1−p0)×(p2−p0)` points to.
-pub fn tet_signed_volume(
-    p0: &Vector3<f64>,
-    p1: &Vector3<f64>,
-    p2: &Vector3<f64>,
-    p3: &Vector3<f64>,
-) -> f64 {
+pub fn tet_signed_volume(p0: &Vector3<f64>, p1: &Vector3<f64>, p2: &Vector3<f64>, p3: &Vector3<f64>) -> f64 {
     (1.0 / 6.0) * (p1 - p0).cross(&(p2 - p0)).dot(&(p3 - p0))
 }
 
@@ -428,23 +412,13 @@ pub fn triangle_areas(vertices: &[Vector3<f64>], triangles: &[[usize; 3]]) -> Ve
 /// Signed volume of every tet, in m³ ([`tet_signed_volume`]).
 pub fn tet_signed_volumes(vertices: &[Vector3<f64>], tets: &[[usize; 4]]) -> Vec<f64> {
     tets.iter()
-        .map(|t| {
-            tet_signed_volume(
-                &vertices[t[0]],
-                &vertices[t[1]],
-                &vertices[t[2]],
-                &vertices[t[3]],
-            )
-        })
+        .map(|t| tet_signed_volume(&vertices[t[0]], &vertices[t[1]], &vertices[t[2]], &vertices[t[3]]))
         .collect()
 }
 
 /// Sum of the unsigned tet volumes in m³ (Stark's `total_volume`).
 pub fn total_tet_volume(vertices: &[Vector3<f64>], tets: &[[usize; 4]]) -> f64 {
-    tet_signed_volumes(vertices, tets)
-        .into_iter()
-        .map(f64::abs)
-        .sum()
+    tet_signed_volumes(vertices, tets).into_iter().map(f64::abs).sum()
 }
 
 /// Checks indices and that every tet has a finite, strictly positive signed volume.
@@ -456,12 +430,7 @@ pub fn total_tet_volume(vertices: &[Vector3<f64>], tets: &[[usize; 4]]) -> f64 {
 pub fn check_tet_volumes(vertices: &[Vector3<f64>], tets: &[[usize; 4]]) -> Result<(), MeshError> {
     check_indices(vertices.len(), tets)?;
     for (tet, t) in tets.iter().enumerate() {
-        let volume = tet_signed_volume(
-            &vertices[t[0]],
-            &vertices[t[1]],
-            &vertices[t[2]],
-            &vertices[t[3]],
-        );
+        let volume = tet_signed_volume(&vertices[t[0]], &vertices[t[1]], &vertices[t[2]], &vertices[t[3]]);
         if volume.is_nan() || volume <= 0.0 {
             return Err(MeshError::NonPositiveVolume { tet, volume });
         }
@@ -475,13 +444,7 @@ pub fn check_tet_volumes(vertices: &[Vector3<f64>], tets: &[[usize; 4]]) -> Resu
 pub fn fix_tet_orientation(vertices: &[Vector3<f64>], tets: &mut [[usize; 4]]) -> usize {
     let mut flipped = 0;
     for t in tets.iter_mut() {
-        if tet_signed_volume(
-            &vertices[t[0]],
-            &vertices[t[1]],
-            &vertices[t[2]],
-            &vertices[t[3]],
-        ) < 0.0
-        {
+        if tet_signed_volume(&vertices[t[0]], &vertices[t[1]], &vertices[t[2]], &vertices[t[3]]) < 0.0 {
             t.swap(2, 3);
             flipped += 1;
         }
@@ -541,23 +504,11 @@ pub fn lumped_masses_from_triangles(
 
 /// Lumped vertex masses in kg of a solid: each tet gives `|V|/4 · density_kg_per_m3` to each
 /// corner (Stark's `EnergyLumpedInertia::add` for tets, which uses the unsigned volume).
-pub fn lumped_masses_from_tets(
-    vertices: &[Vector3<f64>],
-    tets: &[[usize; 4]],
-    density_kg_per_m3: f64,
-) -> Vec<f64> {
+pub fn lumped_masses_from_tets(vertices: &[Vector3<f64>], tets: &[[usize; 4]], density_kg_per_m3: f64) -> Vec<f64> {
     lumped(
         vertices.len(),
         tets,
-        |t| {
-            tet_signed_volume(
-                &vertices[t[0]],
-                &vertices[t[1]],
-                &vertices[t[2]],
-                &vertices[t[3]],
-            )
-            .abs()
-        },
+        |t| tet_signed_volume(&vertices[t[0]], &vertices[t[1]], &vertices[t[2]], &vertices[t[3]]).abs(),
         density_kg_per_m3,
     )
 }
@@ -620,9 +571,7 @@ pub fn merge_by_distance<const K: usize>(
     tolerance_m: f64,
 ) -> Result<MergedMesh<K>, MeshError> {
     if !(tolerance_m >= 0.0 && tolerance_m.is_finite()) {
-        return Err(MeshError::InvalidTolerance {
-            tolerance: tolerance_m,
-        });
+        return Err(MeshError::InvalidTolerance { tolerance: tolerance_m });
     }
     check_indices(vertices.len(), elements).or_else(|e| match e {
         // Repeated vertices are fine on input: those elements are dropped below.
@@ -646,11 +595,7 @@ pub fn merge_by_distance<const K: usize>(
         // `+ 0.0` turns -0.0 into 0.0 so both hash alike.
         let mut exact: HashMap<[u64; 3], usize> = HashMap::new();
         for p in vertices {
-            let key = [
-                (p.x + 0.0).to_bits(),
-                (p.y + 0.0).to_bits(),
-                (p.z + 0.0).to_bits(),
-            ];
+            let key = [(p.x + 0.0).to_bits(), (p.y + 0.0).to_bits(), (p.z + 0.0).to_bits()];
             let idx = *exact.entry(key).or_insert_with(|| {
                 kept.push(*p);
                 kept.len() - 1
@@ -677,8 +622,7 @@ pub fn merge_by_distance<const K: usize>(
                             continue;
                         };
                         for &c in candidates {
-                            if (kept[c] - p).norm_squared() <= tol_sq && best.is_none_or(|b| c < b)
-                            {
+                            if (kept[c] - p).norm_squared() <= tol_sq && best.is_none_or(|b| c < b) {
                                 best = Some(c);
                             }
                         }
@@ -729,18 +673,12 @@ pub fn translate(points: &mut [Vector3<f64>], translation: &Vector3<f64>) {
 /// Rotates every point about the origin by any nalgebra 3D rotation (`Rotation3`,
 /// `UnitQuaternion`).
 pub fn rotate<R: AbstractRotation<f64, 3>>(points: &mut [Vector3<f64>], rotation: &R) {
-    points
-        .iter_mut()
-        .for_each(|p| *p = rotation.transform_vector(p));
+    points.iter_mut().for_each(|p| *p = rotation.transform_vector(p));
 }
 
 /// Rotates every point about `pivot` (Stark's `rotate_deg(points, angle, axis, pivot)` with
 /// the rotation given explicitly).
-pub fn rotate_about<R: AbstractRotation<f64, 3>>(
-    points: &mut [Vector3<f64>],
-    rotation: &R,
-    pivot: &Vector3<f64>,
-) {
+pub fn rotate_about<R: AbstractRotation<f64, 3>>(points: &mut [Vector3<f64>], rotation: &R, pivot: &Vector3<f64>) {
     points
         .iter_mut()
         .for_each(|p| *p = rotation.transform_vector(&(*p - pivot)) + pivot);
@@ -763,9 +701,7 @@ pub fn scale(points: &mut [Vector3<f64>], factor: f64) {
 
 /// Multiplies every point component-wise by `factors` (Stark's `scale(points, Vector3d)`).
 pub fn scale_xyz(points: &mut [Vector3<f64>], factors: &Vector3<f64>) {
-    points
-        .iter_mut()
-        .for_each(|p| *p = p.component_mul(factors));
+    points.iter_mut().for_each(|p| *p = p.component_mul(factors));
 }
 
 /// Mirrors every point across the plane `x[axis] = pivot` (Stark's `mirror`). This flips the
@@ -775,9 +711,7 @@ pub fn scale_xyz(points: &mut [Vector3<f64>], factors: &Vector3<f64>) {
 /// If `axis > 2`.
 pub fn mirror(points: &mut [Vector3<f64>], axis: usize, pivot: f64) {
     assert!(axis < 3, "mirror: axis must be 0, 1 or 2, got {axis}");
-    points
-        .iter_mut()
-        .for_each(|p| p[axis] = pivot - (p[axis] - pivot));
+    points.iter_mut().for_each(|p| p[axis] = pivot - (p[axis] - pivot));
 }
 
 /// Moves the points so that their centroid is at the origin (Stark's `center`) and returns
@@ -989,9 +923,7 @@ mod tests {
             assert!((d.norm() - 1.0).abs() < 1e-12, "diagonal reported as sharp");
         }
         let s = sphere_mesh(1.0, 3);
-        assert!(sharp_edges(&s.vertices, &s.elements, 30.0)
-            .unwrap()
-            .is_empty());
+        assert!(sharp_edges(&s.vertices, &s.elements, 30.0).unwrap().is_empty());
     }
 
     #[test]
@@ -1010,10 +942,7 @@ mod tests {
         assert!(check_tet_volumes(&v, &t).is_ok());
         let tiny = vec![v[0], v[1], v[2], Vector3::new(0.0, 0.0, -7.2e-9)];
         let err = check_tet_volumes(&tiny, &[[0, 1, 2, 3]]).unwrap_err();
-        assert_eq!(
-            err.to_string(),
-            "tet 0: rest volume -1.2e-9 m³ is not positive"
-        );
+        assert_eq!(err.to_string(), "tet 0: rest volume -1.2e-9 m³ is not positive");
         let err = check_tet_volumes(&v, &[[0, 1, 2, 9]]).unwrap_err();
         assert_eq!(
             err.to_string(),
@@ -1087,23 +1016,14 @@ mod tests {
         let mut rng = StdRng::seed_from_u64(0);
         let tol = 0.05;
         let v: Vec<Vector3<f64>> = (0..400)
-            .map(|_| {
-                Vector3::new(
-                    rng.random::<f64>(),
-                    rng.random::<f64>(),
-                    rng.random::<f64>(),
-                ) * 0.6
-            })
+            .map(|_| Vector3::new(rng.random::<f64>(), rng.random::<f64>(), rng.random::<f64>()) * 0.6)
             .collect();
         let merged = merge_by_distance::<1>(&v, &[], tol).unwrap();
         // Reference: greedy in order, earliest kept representative within tolerance.
         let mut kept: Vec<Vector3<f64>> = Vec::new();
         let mut map = Vec::new();
         for p in &v {
-            match kept
-                .iter()
-                .position(|k| (k - p).norm_squared() <= tol * tol)
-            {
+            match kept.iter().position(|k| (k - p).norm_squared() <= tol * tol) {
                 Some(i) => map.push(i),
                 None => {
                     kept.push(*p);

@@ -127,18 +127,14 @@ fn check_exists(path: &Path) -> Result<(), MeshFileError> {
     if path.is_file() {
         Ok(())
     } else {
-        Err(MeshFileError::NotFound {
-            path: path.to_owned(),
-        })
+        Err(MeshFileError::NotFound { path: path.to_owned() })
     }
 }
 
 fn read_to_bytes(path: &Path) -> Result<Vec<u8>, MeshFileError> {
     fs::read(path).map_err(|source| {
         if source.kind() == io::ErrorKind::NotFound {
-            MeshFileError::NotFound {
-                path: path.to_owned(),
-            }
+            MeshFileError::NotFound { path: path.to_owned() }
         } else {
             MeshFileError::Io {
                 path: path.to_owned(),
@@ -155,9 +151,7 @@ fn read_to_bytes(path: &Path) -> Result<Vec<u8>, MeshFileError> {
 /// [`MeshFileError::UnknownExtension`], [`MeshFileError::NotFound`], or the loader's error.
 pub fn load_mesh(path: impl AsRef<Path>) -> Result<LoadedMesh, MeshFileError> {
     let path = path.as_ref();
-    let extension = path
-        .extension()
-        .map(|e| e.to_string_lossy().to_ascii_lowercase());
+    let extension = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase());
     match extension.as_deref() {
         Some("obj") => load_obj(path).map(|m| LoadedMesh {
             vertices: m.vertices,
@@ -226,9 +220,7 @@ fn obj_models(path: &Path) -> Result<Vec<tobj::Model>, MeshFileError> {
         ..Default::default()
     };
     let (models, _materials) = tobj::load_obj(path, &options).map_err(|source| match source {
-        tobj::LoadError::OpenFileFailed => MeshFileError::NotFound {
-            path: path.to_owned(),
-        },
+        tobj::LoadError::OpenFileFailed => MeshFileError::NotFound { path: path.to_owned() },
         source => MeshFileError::Obj {
             path: path.to_owned(),
             source,
@@ -279,18 +271,15 @@ pub fn load_obj(path: impl AsRef<Path>) -> Result<Mesh<3>, MeshFileError> {
         let m = obj_model_mesh(&model);
         let offset = all.vertices.len();
         all.vertices.extend(m.vertices);
-        all.elements
-            .extend(m.elements.iter().map(|t| t.map(|i| i + offset)));
+        all.elements.extend(m.elements.iter().map(|t| t.map(|i| i + offset)));
     }
     weld(path, all)
 }
 
 fn weld(path: &Path, mesh: Mesh<3>) -> Result<Mesh<3>, MeshFileError> {
-    let merged = merge_by_distance(&mesh.vertices, &mesh.elements, 0.0).map_err(|source| {
-        MeshFileError::Mesh {
-            path: path.to_owned(),
-            source,
-        }
+    let merged = merge_by_distance(&mesh.vertices, &mesh.elements, 0.0).map_err(|source| MeshFileError::Mesh {
+        path: path.to_owned(),
+        source,
     })?;
     Ok(Mesh {
         vertices: merged.vertices,
@@ -306,11 +295,10 @@ fn weld(path: &Path, mesh: Mesh<3>) -> Result<Mesh<3>, MeshFileError> {
 pub fn load_stl(path: impl AsRef<Path>) -> Result<Mesh<3>, MeshFileError> {
     let path = path.as_ref();
     let bytes = read_to_bytes(path)?;
-    let indexed =
-        stl_io::read_stl(&mut io::Cursor::new(bytes)).map_err(|source| MeshFileError::Stl {
-            path: path.to_owned(),
-            source,
-        })?;
+    let indexed = stl_io::read_stl(&mut io::Cursor::new(bytes)).map_err(|source| MeshFileError::Stl {
+        path: path.to_owned(),
+        source,
+    })?;
     let mesh = Mesh {
         vertices: indexed
             .vertices
@@ -389,12 +377,11 @@ impl<'a> MshParser<'a> {
     }
 
     fn token(&mut self, what: &str) -> Result<(usize, &'a str), MeshFileError> {
-        let t = self.tokens.get(self.next).copied().ok_or_else(|| {
-            self.error(
-                self.last_line,
-                format!("unexpected end of file, expected {what}"),
-            )
-        })?;
+        let t = self
+            .tokens
+            .get(self.next)
+            .copied()
+            .ok_or_else(|| self.error(self.last_line, format!("unexpected end of file, expected {what}")))?;
         self.next += 1;
         Ok(t)
     }
@@ -466,10 +453,7 @@ impl<'a> MshParser<'a> {
                     }
                 }
                 other => {
-                    return Err(self.error(
-                        line,
-                        format!("expected a section such as $MeshFormat, found '{other}'"),
-                    ))
+                    return Err(self.error(line, format!("expected a section such as $MeshFormat, found '{other}'")))
                 }
             }
         }
@@ -498,10 +482,7 @@ impl<'a> MshParser<'a> {
             for _ in 0..n {
                 let line = self.tokens.get(self.next).map_or(self.last_line, |t| t.0);
                 let tag: usize = self.number("a node tag")?;
-                if node_index
-                    .insert(tag, vertices.len() + tags.len())
-                    .is_some()
-                {
+                if node_index.insert(tag, vertices.len() + tags.len()).is_some() {
                     return Err(self.error(line, format!("node tag {tag} is defined twice")));
                 }
                 tags.push(tag);
@@ -522,20 +503,13 @@ impl<'a> MshParser<'a> {
             let line = self.tokens.get(self.next).map_or(self.last_line, |t| t.0);
             return Err(self.error(
                 line,
-                format!(
-                    "$Nodes declares {n_nodes} nodes but its blocks hold {}",
-                    vertices.len()
-                ),
+                format!("$Nodes declares {n_nodes} nodes but its blocks hold {}", vertices.len()),
             ));
         }
         self.expect("$EndNodes")
     }
 
-    fn elements(
-        &mut self,
-        mesh: &mut LoadedMesh,
-        node_index: &HashMap<usize, usize>,
-    ) -> Result<(), MeshFileError> {
+    fn elements(&mut self, mesh: &mut LoadedMesh, node_index: &HashMap<usize, usize>) -> Result<(), MeshFileError> {
         let n_blocks: usize = self.number("the number of element blocks")?;
         let _n_elements: usize = self.number("the number of elements")?;
         let _min: usize = self.number("the minimum element tag")?;
@@ -543,11 +517,7 @@ impl<'a> MshParser<'a> {
         for _ in 0..n_blocks {
             let _dim: usize = self.number("the entity dimension")?;
             let _entity: i64 = self.number("the entity tag")?;
-            let (type_line, _) = self
-                .tokens
-                .get(self.next)
-                .copied()
-                .unwrap_or((self.last_line, ""));
+            let (type_line, _) = self.tokens.get(self.next).copied().unwrap_or((self.last_line, ""));
             let element_type: u32 = self.number("the element type")?;
             let n: usize = self.number("the number of elements in the block")?;
             let n_nodes = match element_type {
@@ -569,11 +539,7 @@ impl<'a> MshParser<'a> {
                 let _tag: usize = self.number("an element tag")?;
                 let mut nodes = [0usize; 4];
                 for node in nodes.iter_mut().take(n_nodes) {
-                    let (line, _) = self
-                        .tokens
-                        .get(self.next)
-                        .copied()
-                        .unwrap_or((self.last_line, ""));
+                    let (line, _) = self.tokens.get(self.next).copied().unwrap_or((self.last_line, ""));
                     let tag: usize = self.number("a node tag")?;
                     *node = *node_index.get(&tag).ok_or_else(|| {
                         self.error(
@@ -645,14 +611,8 @@ mod tests {
         let shapes = load_obj_shapes(&p).unwrap();
         assert_eq!(shapes.len(), 2);
         assert_eq!(shapes[0].0, "bottom_and_top");
-        assert_eq!(
-            (shapes[0].1.vertices.len(), shapes[0].1.elements.len()),
-            (8, 4)
-        );
-        assert_eq!(
-            (shapes[1].1.vertices.len(), shapes[1].1.elements.len()),
-            (8, 8)
-        );
+        assert_eq!((shapes[0].1.vertices.len(), shapes[0].1.elements.len()), (8, 4));
+        assert_eq!((shapes[1].1.vertices.len(), shapes[1].1.elements.len()), (8, 8));
         let merged = load_obj(&p).unwrap();
         assert_eq!(merged.vertices.len(), 8);
         assert_eq!(merged.elements.len(), 12);
@@ -660,10 +620,7 @@ mod tests {
         let vol: f64 = merged
             .elements
             .iter()
-            .map(|t| {
-                merged.vertices[t[0]].dot(&merged.vertices[t[1]].cross(&merged.vertices[t[2]]))
-                    / 6.0
-            })
+            .map(|t| merged.vertices[t[0]].dot(&merged.vertices[t[1]].cross(&merged.vertices[t[2]])) / 6.0)
             .sum();
         assert!((vol - 1.0).abs() < 1e-12);
         let via_dispatch = load_mesh(dir.path().join("cube.obj")).unwrap();
@@ -679,20 +636,13 @@ mod tests {
             err.to_string(),
             format!("file '{}' not found", dir.path().join("cup.obj").display())
         );
-        let p = write(
-            dir.path(),
-            "bad.obj",
-            b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n",
-        );
+        let p = write(dir.path(), "bad.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n");
         let err = load_obj(&p).unwrap_err();
         assert!(matches!(err, MeshFileError::Obj { .. }), "{err}");
         assert!(err.to_string().contains("cannot parse OBJ"), "{err}");
         let p = write(dir.path(), "lines.obj", b"v 0 0 0\nv 1 0 0\nl 1 2\n");
         let err = load_triangle_mesh(&p).unwrap_err();
-        assert_eq!(
-            err.to_string(),
-            format!("'{}' contains no triangles", p.display())
-        );
+        assert_eq!(err.to_string(), format!("'{}' contains no triangles", p.display()));
     }
 
     #[test]
@@ -737,10 +687,7 @@ mod tests {
     fn vtk_tet_mesh_roundtrip() {
         let dir = tempfile::tempdir().unwrap();
         let m = tet_grid(Vector3::zeros(), Vector3::repeat(0.1), [2, 2, 2]);
-        for (name, encoding) in [
-            ("a.vtk", VtkEncoding::Ascii),
-            ("b.VTK", VtkEncoding::Binary),
-        ] {
+        for (name, encoding) in [("a.vtk", VtkEncoding::Ascii), ("b.VTK", VtkEncoding::Binary)] {
             let p = dir.path().join(name);
             VtkWriter::new(&m.vertices, VtkCells::Tets(&m.elements))
                 .encoding(encoding)
@@ -750,10 +697,7 @@ mod tests {
             assert_eq!(loaded, m);
             assert!(matches!(
                 load_triangle_mesh(&p),
-                Err(MeshFileError::NoElements {
-                    what: "triangles",
-                    ..
-                })
+                Err(MeshFileError::NoElements { what: "triangles", .. })
             ));
         }
     }
@@ -813,9 +757,7 @@ mod tests {
             "unknown mesh file extension `.xyz` in 'foo.xyz' (expected .obj, .stl, .vtk, .msh)"
         );
         let err = load_mesh("foo").unwrap_err();
-        assert!(
-            matches!(err, MeshFileError::UnknownExtension { ref extension, .. } if extension.is_empty())
-        );
+        assert!(matches!(err, MeshFileError::UnknownExtension { ref extension, .. } if extension.is_empty()));
         for name in ["missing.stl", "missing.vtk", "missing.msh", "missing.obj"] {
             let err = load_mesh(dir.path().join(name)).unwrap_err();
             assert!(err.to_string().starts_with("file '"), "{name}: {err}");
@@ -828,12 +770,13 @@ mod tests {
             .write(&p)
             .unwrap();
         let err = load_tet_mesh(&p).unwrap_err();
-        assert_eq!(
-            err.to_string(),
-            format!("'{}' contains no tetrahedra", p.display())
+        assert_eq!(err.to_string(), format!("'{}' contains no tetrahedra", p.display()));
+        let p = write(
+            dir.path(),
+            "hex.vtk",
+            b"# vtk DataFile Version 4.2\nh\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 8 double\n\
+            0 0 0 1 0 0 1 1 0 0 1 0 0 0 1 1 0 1 1 1 1 0 1 1\nCELLS 1 9\n8 0 1 2 3 4 5 6 7\nCELL_TYPES 1\n12\n",
         );
-        let p = write(dir.path(), "hex.vtk", b"# vtk DataFile Version 4.2\nh\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 8 double\n\
-            0 0 0 1 0 0 1 1 0 0 1 0 0 0 1 1 0 1 1 1 1 0 1 1\nCELLS 1 9\n8 0 1 2 3 4 5 6 7\nCELL_TYPES 1\n12\n");
         let err = load_mesh(&p).unwrap_err();
         assert!(
             err.to_string()

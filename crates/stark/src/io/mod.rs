@@ -7,13 +7,10 @@ pub mod scene;
 pub mod vtk;
 
 pub use mesh_files::{
-    load_mesh, load_msh, load_obj, load_obj_shapes, load_stl, load_tet_mesh, load_triangle_mesh,
-    load_vtk_mesh, parse_msh, LoadedMesh, MeshFileError,
+    load_mesh, load_msh, load_obj, load_obj_shapes, load_stl, load_tet_mesh, load_triangle_mesh, load_vtk_mesh,
+    parse_msh, LoadedMesh, MeshFileError,
 };
-pub use scene::{
-    load_scene, load_scene_with, parse_scene, parse_scene_with, LoadedScene, SceneError,
-};
+pub use scene::{load_scene, load_scene_with, parse_scene, parse_scene_with, LoadedScene, SceneError};
 pub use vtk::{
-    parse_vtk, read_vtk, VtkAttribute, VtkCellType, VtkCells, VtkEncoding, VtkError, VtkMesh,
-    VtkPrecision, VtkWriter,
+    parse_vtk, read_vtk, VtkAttribute, VtkCellType, VtkCells, VtkEncoding, VtkError, VtkMesh, VtkPrecision, VtkWriter,
 };

@@ -69,12 +69,7 @@ impl Output {
     }
 
     /// Write one frame of every mesh; returns the files written.
-    pub fn write_frame(
-        &mut self,
-        directory: &Path,
-        name: &str,
-        nodes: &NodeArrays,
-    ) -> Result<Vec<PathBuf>> {
+    pub fn write_frame(&mut self, directory: &Path, name: &str, nodes: &NodeArrays) -> Result<Vec<PathBuf>> {
         std::fs::create_dir_all(directory).map_err(|e| io_err(directory, e))?;
         let mut files = Vec::new();
         for mesh in &self.meshes {
@@ -89,15 +84,9 @@ impl Output {
                 OutputCells::Triangles(t) => VtkCells::Triangles(t),
                 OutputCells::Tets(t) => VtkCells::Tets(t),
             };
-            let path = directory.join(format!(
-                "{name}_{}_{:05}.vtk",
-                mesh.label, self.frames_written
-            ));
+            let path = directory.join(format!("{name}_{}_{:05}.vtk", mesh.label, self.frames_written));
             VtkWriter::new(&self.scratch_x, cells)
-                .title(&format!(
-                    "{name} {} frame {}",
-                    mesh.label, self.frames_written
-                ))
+                .title(&format!("{name} {} frame {}", mesh.label, self.frames_written))
                 .point_vectors("velocity", &self.scratch_v)
                 .write(&path)
                 .map_err(|e| StarkError::Output {

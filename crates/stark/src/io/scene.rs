@@ -53,9 +53,7 @@ use crate::error::{Result, StarkError};
 use crate::geometry::mesh;
 use crate::io::mesh_files::{load_tet_mesh, load_triangle_mesh};
 use crate::presets::meshes;
-use crate::presets::{
-    LineHandle, LineMaterial, SurfaceHandle, SurfaceMaterial, VolumeHandle, VolumeMaterial,
-};
+use crate::presets::{LineHandle, LineMaterial, SurfaceHandle, SurfaceMaterial, VolumeHandle, VolumeMaterial};
 use crate::simulation::Simulation;
 use crate::solver::Settings;
 use nalgebra::{Rotation3, Unit, Vector3};
@@ -168,18 +166,12 @@ impl Motion {
     /// Check the values; the error names the field.
     pub fn validate(&self) -> std::result::Result<(), (&'static str, String)> {
         if !self.start_s.is_finite() {
-            return Err((
-                "start_s",
-                format!("start_s = {} must be finite", self.start_s),
-            ));
+            return Err(("start_s", format!("start_s = {} must be finite", self.start_s)));
         }
         if self.end_s.is_nan() || self.end_s <= self.start_s {
             return Err((
                 "end_s",
-                format!(
-                    "end_s = {} must be greater than start_s = {}",
-                    self.end_s, self.start_s
-                ),
+                format!("end_s = {} must be greater than start_s = {}", self.end_s, self.start_s),
             ));
         }
         if !self.velocity_m_s.iter().all(|v| v.is_finite()) {
@@ -189,19 +181,15 @@ impl Motion {
             return Err(("center_m", "center_m must be finite".into()));
         }
         if !self.angular_velocity_deg_s.is_finite() {
-            return Err((
-                "angular_velocity_deg_s",
-                "angular_velocity_deg_s must be finite".into(),
-            ));
+            return Err(("angular_velocity_deg_s", "angular_velocity_deg_s must be finite".into()));
         }
         match self.axis {
             Some(a) if !a.iter().all(|v| v.is_finite()) || Vector3::from(a).norm() == 0.0 => {
                 Err(("axis", format!("axis {a:?} must be finite and non-zero")))
             }
-            None if self.angular_velocity_deg_s != 0.0 => Err((
-                "angular_velocity_deg_s",
-                "a rotating motion needs an `axis`".into(),
-            )),
+            None if self.angular_velocity_deg_s != 0.0 => {
+                Err(("angular_velocity_deg_s", "a rotating motion needs an `axis`".into()))
+            }
             _ => Ok(()),
         }
     }
@@ -212,9 +200,7 @@ impl Motion {
         let tau = (t.min(self.end_s) - self.start_s).max(0.0);
         let angle = (self.angular_velocity_deg_s * tau).to_radians();
         let rotation = match self.axis {
-            Some(a) if angle != 0.0 => {
-                Rotation3::from_axis_angle(&Unit::new_normalize(Vector3::from(a)), angle)
-            }
+            Some(a) if angle != 0.0 => Rotation3::from_axis_angle(&Unit::new_normalize(Vector3::from(a)), angle),
             _ => Rotation3::identity(),
         };
         let c = Vector3::from(self.center_m);
@@ -225,9 +211,7 @@ impl Motion {
     /// Move the targets of group `h` to their pose at time `t`.
     pub fn apply(&self, sim: &mut Simulation, h: PrescribedHandle, t: f64) -> Result<()> {
         let (translation, rotation) = self.transform_at(t);
-        sim.deformables
-            .prescribed
-            .set_transform(h, translation, rotation)
+        sim.deformables.prescribed.set_transform(h, translation, rotation)
     }
 }
 
@@ -305,8 +289,7 @@ pub fn parse_scene_with(
     configure: impl FnOnce(&mut Settings),
 ) -> Result<LoadedScene> {
     if file_name.to_ascii_lowercase().ends_with(".json") {
-        let value: serde_json::Value =
-            serde_json::from_str(text).map_err(|e| json_error(file_name, &e))?;
+        let value: serde_json::Value = serde_json::from_str(text).map_err(|e| json_error(file_name, &e))?;
         let file: SceneFile = serde_json::from_str(text).map_err(|e| json_error(file_name, &e))?;
         let ctx = Ctx {
             file: file_name,
@@ -507,14 +490,7 @@ impl At {
 }
 
 /// Entry arrays whose items are described by name rather than by index.
-const ENTRY_KINDS: [&str; 6] = [
-    "surface",
-    "volume",
-    "line",
-    "prescribed",
-    "attachment",
-    "gravity_ramp",
-];
+const ENTRY_KINDS: [&str; 6] = ["surface", "volume", "line", "prescribed", "attachment", "gravity_ramp"];
 
 /// The untyped document, for spans (TOML only) and entry labels.
 enum Tree<'a> {
@@ -536,12 +512,7 @@ impl Tree<'_> {
                 .get_ref()
                 .as_str()
                 .map(str::to_string),
-            Tree::Json(v) => v
-                .get(kind)?
-                .get(index)?
-                .get(key)?
-                .as_str()
-                .map(str::to_string),
+            Tree::Json(v) => v.get(kind)?.get(index)?.get(key)?.as_str().map(str::to_string),
         }
     }
 }
@@ -670,10 +641,7 @@ impl Ctx<'_> {
     /// An error at `at`; for "unknown field `x`" the path names the table holding `x`.
     fn err(&self, at: &At, message: impl Into<String>) -> SceneError {
         let message = message.into();
-        let (line, column) = self
-            .span_of(at)
-            .map(|s| line_col(self.text, s.start))
-            .unzip();
+        let (line, column) = self.span_of(at).map(|s| line_col(self.text, s.start)).unzip();
         let mut shown = at.clone();
         if let (Some(Seg::Key(last)), Some(unknown)) = (
             shown.0.last(),
@@ -822,9 +790,7 @@ fn find_culprit<M: DeserializeOwned>(
         let mut merged = base.clone();
         merge(&mut merged, &nest(prefix, v));
         if let Err(e) = merged.try_into::<M>() {
-            if let (toml::Value::Table(t), Some(toml::Value::Table(b))) =
-                (v, value_at(base, prefix))
-            {
+            if let (toml::Value::Table(t), Some(toml::Value::Table(b))) = (v, value_at(base, prefix)) {
                 if !is_variant_switch(b, t) {
                     if let Some(found) = find_culprit::<M>(base, t, prefix) {
                         return Some(found);
@@ -855,11 +821,7 @@ fn find_key(over: &toml::Table, key: &str) -> Option<Vec<String>> {
 }
 
 /// The material of the entry at `at` from its `material` value.
-fn resolve_material<M: MaterialPresets>(
-    ctx: &Ctx,
-    at: &At,
-    value: &toml::Value,
-) -> std::result::Result<M, SceneError> {
+fn resolve_material<M: MaterialPresets>(ctx: &Ctx, at: &At, value: &toml::Value) -> std::result::Result<M, SceneError> {
     let at = at.key("material");
     let (preset_name, preset_at, overrides) = match value {
         toml::Value::String(s) => (s.as_str(), at.clone(), None),
@@ -881,9 +843,9 @@ fn resolve_material<M: MaterialPresets>(
             return Err(ctx.err(
                 &at,
                 format!(
-                "invalid type: {}, expected a preset name or a table {{ preset = \"...\", ... }}",
-                other.type_str()
-            ),
+                    "invalid type: {}, expected a preset name or a table {{ preset = \"...\", ... }}",
+                    other.type_str()
+                ),
             ))
         }
     };
@@ -902,33 +864,23 @@ fn resolve_material<M: MaterialPresets>(
     let Some(overrides) = overrides else {
         return Ok(preset);
     };
-    let base = toml::Value::try_from(&preset)
-        .map_err(|e| ctx.err(&at, format!("cannot serialise the preset: {e}")))?;
+    let base = toml::Value::try_from(&preset).map_err(|e| ctx.err(&at, format!("cannot serialise the preset: {e}")))?;
     let mut merged = base.clone();
     merge(&mut merged, &toml::Value::Table(overrides.clone()));
-    merged.try_into::<M>().map_err(|e| {
-        match find_culprit::<M>(&base, &overrides, &mut Vec::new()) {
+    merged
+        .try_into::<M>()
+        .map_err(|e| match find_culprit::<M>(&base, &overrides, &mut Vec::new()) {
             Some((path, message)) => ctx.err(&at.keys(&path), message),
             None => ctx.err(&at, e.message().trim_end()),
-        }
-    })
+        })
 }
 
 /// Locate a library error raised by `add_surface`/`add_volume`/`add_line`: a parameter in the
 /// material, anything else in the geometry.
-fn object_error(
-    ctx: &Ctx,
-    at: &At,
-    material: &toml::Value,
-    geometry_key: &str,
-    e: StarkError,
-) -> SceneError {
+fn object_error(ctx: &Ctx, at: &At, material: &toml::Value, geometry_key: &str, e: StarkError) -> SceneError {
     match &e {
         StarkError::InvalidParameter { field, .. } => {
-            let path = material
-                .as_table()
-                .and_then(|t| find_key(t, field))
-                .unwrap_or_default();
+            let path = material.as_table().and_then(|t| find_key(t, field)).unwrap_or_default();
             ctx.stark(&at.key("material").keys(&path), e)
         }
         _ => ctx.stark(&at.key(geometry_key), e),
@@ -979,10 +931,7 @@ fn geometry_key(
         [] => Err(ctx.err(at, format!("no geometry: give one of {options}"))),
         _ => Err(ctx.err(
             &at.key(given[1]),
-            format!(
-                "more than one geometry ({}): give one of {options}",
-                given.join(", ")
-            ),
+            format!("more than one geometry ({}): give one of {options}", given.join(", ")),
         )),
     }
 }
@@ -998,10 +947,7 @@ fn place(
 ) -> std::result::Result<(), SceneError> {
     if let Some(s) = scale {
         if !(s > 0.0 && s.is_finite()) {
-            return Err(ctx.err(
-                &at.key("scale"),
-                format!("scale = {s} must be positive and finite"),
-            ));
+            return Err(ctx.err(&at.key("scale"), format!("scale = {s} must be positive and finite")));
         }
         mesh::scale(vertices, s);
     }
@@ -1078,8 +1024,7 @@ fn build_surface(
         }
         "mesh" => {
             let path = mesh_path(base_dir, e.mesh.as_deref().expect("checked"));
-            let m = load_triangle_mesh(&path)
-                .map_err(|err| ctx.err(&at.key("mesh"), err.to_string()))?;
+            let m = load_triangle_mesh(&path).map_err(|err| ctx.err(&at.key("mesh"), err.to_string()))?;
             (m.vertices, m.elements)
         }
         _ => (
@@ -1092,14 +1037,7 @@ fn build_surface(
             e.elements.clone().expect("checked"),
         ),
     };
-    place(
-        ctx,
-        at,
-        &mut vertices,
-        e.scale,
-        e.rotate_deg.as_ref(),
-        e.translate_m,
-    )?;
+    place(ctx, at, &mut vertices, e.scale, e.rotate_deg.as_ref(), e.translate_m)?;
     sim.add_surface(&e.name, &vertices, &triangles, &material)
         .map_err(|err| object_error(ctx, at, &e.material, key, err))
 }
@@ -1147,24 +1085,12 @@ fn build_volume(
             e.elements.clone().expect("checked"),
         ),
     };
-    place(
-        ctx,
-        at,
-        &mut vertices,
-        e.scale,
-        e.rotate_deg.as_ref(),
-        e.translate_m,
-    )?;
+    place(ctx, at, &mut vertices, e.scale, e.rotate_deg.as_ref(), e.translate_m)?;
     sim.add_volume(&e.name, &vertices, &tets, &material)
         .map_err(|err| object_error(ctx, at, &e.material, key, err))
 }
 
-fn build_line(
-    sim: &mut Simulation,
-    ctx: &Ctx,
-    at: &At,
-    e: &LineEntry,
-) -> std::result::Result<LineHandle, SceneError> {
+fn build_line(sim: &mut Simulation, ctx: &Ctx, at: &At, e: &LineEntry) -> std::result::Result<LineHandle, SceneError> {
     let material: LineMaterial = resolve_material(ctx, at, &e.material)?;
     let key = geometry_key(
         ctx,
@@ -1182,10 +1108,7 @@ fn build_line(
                 return Err(ctx.err(&at.key("segments"), "begin_m and end_m must be finite"));
             }
             if s.count == 0 {
-                return Err(ctx.err(
-                    &at.keys(&["segments", "count"]),
-                    "count = 0 must be positive",
-                ));
+                return Err(ctx.err(&at.keys(&["segments", "count"]), "count = 0 must be positive"));
             }
             let m = meshes::segment_line(Vector3::from(s.begin_m), Vector3::from(s.end_m), s.count);
             (m.vertices, m.elements)
@@ -1200,14 +1123,7 @@ fn build_line(
             e.elements.clone().expect("checked"),
         ),
     };
-    place(
-        ctx,
-        at,
-        &mut vertices,
-        e.scale,
-        e.rotate_deg.as_ref(),
-        e.translate_m,
-    )?;
+    place(ctx, at, &mut vertices, e.scale, e.rotate_deg.as_ref(), e.translate_m)?;
     sim.add_line(&e.name, &vertices, &segments, &material)
         .map_err(|err| object_error(ctx, at, &e.material, key, err))
 }
@@ -1222,24 +1138,20 @@ fn find_object<'o>(
     objects: &'o [(String, SceneObject)],
     name: &str,
 ) -> std::result::Result<&'o SceneObject, SceneError> {
-    objects
-        .iter()
-        .find(|(n, _)| n == name)
-        .map(|(_, o)| o)
-        .ok_or_else(|| {
-            let names: Vec<_> = objects.iter().map(|(n, _)| n.as_str()).collect();
-            ctx.err(
-                at,
-                format!(
-                    "unknown object '{name}', expected one of {}",
-                    if names.is_empty() {
-                        "(no objects defined)".to_string()
-                    } else {
-                        names.join(", ")
-                    }
-                ),
-            )
-        })
+    objects.iter().find(|(n, _)| n == name).map(|(_, o)| o).ok_or_else(|| {
+        let names: Vec<_> = objects.iter().map(|(n, _)| n.as_str()).collect();
+        ctx.err(
+            at,
+            format!(
+                "unknown object '{name}', expected one of {}",
+                if names.is_empty() {
+                    "(no objects defined)".to_string()
+                } else {
+                    names.join(", ")
+                }
+            ),
+        )
+    })
 }
 
 /// Locate an error of a parameter group: a named parameter at its key, anything else at
@@ -1311,32 +1223,16 @@ fn build_prescribed(
     let located = |err: StarkError| ctx.stark(&at.key(key), err);
     let (handle, n) = match key {
         "inside_box" | "outside_box" => {
-            let b = e
-                .inside_box
-                .as_ref()
-                .or(e.outside_box.as_ref())
-                .expect("checked");
+            let b = e.inside_box.as_ref().or(e.outside_box.as_ref()).expect("checked");
             check_box(ctx, &at.key(key), b)?;
             let (center, size) = (Vector3::from(b.center_m), Vector3::from(b.size_m));
             let (h, n) = sim
                 .deformables
                 .prescribed
-                .add_in_box(
-                    &sim.nodes,
-                    set,
-                    label,
-                    center,
-                    size,
-                    key == "inside_box",
-                    params,
-                )
+                .add_in_box(&sim.nodes, set, label, center, size, key == "inside_box", params)
                 .map_err(located)?;
             if n == 0 {
-                let where_ = if key == "inside_box" {
-                    "inside"
-                } else {
-                    "outside"
-                };
+                let where_ = if key == "inside_box" { "inside" } else { "outside" };
                 return Err(ctx.err(
                     &at.key(key),
                     format!(
@@ -1380,9 +1276,7 @@ fn build_prescribed(
             .validate()
             .map_err(|(field, message)| ctx.err(&at.keys(&["motion", field]), message))?;
         let m = motion.clone();
-        sim.add_time_event(motion.start_s, f64::INFINITY, move |sim, t| {
-            m.apply(sim, handle, t)
-        });
+        sim.add_time_event(motion.start_s, f64::INFINITY, move |sim, t| m.apply(sim, handle, t));
     }
     Ok(ScenePrescribed {
         object: e.object.clone(),
@@ -1407,17 +1301,9 @@ fn build_attachment(
         stiffness: e.stiffness.unwrap_or(defaults.stiffness),
         tolerance_m: e.tolerance_m.unwrap_or(defaults.tolerance_m),
     };
-    params
-        .validate(&label)
-        .map_err(|err| param_error(ctx, at, "a", err))?;
+    params.validate(&label).map_err(|err| param_error(ctx, at, "a", err))?;
     let attachments = &mut sim.deformables.attachments;
-    let handle = match (
-        &e.nodes_a,
-        &e.nodes_b,
-        &e.triangles_b,
-        &e.barycentric_b,
-        e.within_m,
-    ) {
+    let handle = match (&e.nodes_a, &e.nodes_b, &e.triangles_b, &e.barycentric_b, e.within_m) {
         (Some(pa), Some(pb), None, None, None) => attachments
             .add_point_point(&label, a, pa, b, pb, params)
             .map_err(|err| ctx.stark(&at.key("nodes_b"), err))?,
@@ -1428,9 +1314,7 @@ fn build_attachment(
             if !(d >= 0.0 && d.is_finite()) || e.a == e.b {
                 return Err(ctx.err(
                     &at.key("within_m"),
-                    format!(
-                        "within_m = {d} needs a non-negative distance and two different objects"
-                    ),
+                    format!("within_m = {d} needs a non-negative distance and two different objects"),
                 ));
             }
             let xa = &sim.nodes.x[a.range()];
@@ -1453,10 +1337,7 @@ fn build_attachment(
             if pa.is_empty() {
                 return Err(ctx.err(
                     &at.key("within_m"),
-                    format!(
-                        "no node of '{}' lies within {d} m of a node of '{}'",
-                        e.a, e.b
-                    ),
+                    format!("no node of '{}' lies within {d} m of a node of '{}'", e.a, e.b),
                 ));
             }
             attachments
@@ -1522,10 +1403,7 @@ fn build(
     if !(file.duration_s > 0.0 && file.duration_s.is_finite()) {
         return Err(ctx.err(
             &At::default().key("duration_s"),
-            format!(
-                "duration_s = {} must be positive and finite",
-                file.duration_s
-            ),
+            format!("duration_s = {} must be positive and finite", file.duration_s),
         ));
     }
     let mut settings = file.settings;
@@ -1569,10 +1447,7 @@ fn build(
         if let Some((k, j, _)) = seen.iter().find(|(_, _, n)| *n == name) {
             return Err(ctx.err(
                 &at,
-                format!(
-                    "duplicate object name '{name}' (already used by {k} #{})",
-                    j + 1
-                ),
+                format!("duplicate object name '{name}' (already used by {k} #{})", j + 1),
             ));
         }
         seen.push((kind, *i, name));
@@ -1622,9 +1497,7 @@ mod tests {
     use std::path::PathBuf;
 
     fn repo_scene(name: &str) -> PathBuf {
-        Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../../scenes")
-            .join(name)
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes").join(name)
     }
 
     /// No files written, one thread (deterministic and quiet).
@@ -1751,17 +1624,14 @@ mod tests {
 
     #[test]
     fn the_documented_example_loads() {
-        let doc = std::fs::read_to_string(
-            Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/scene-format.md"),
-        )
-        .unwrap();
+        let doc =
+            std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/scene-format.md")).unwrap();
         let example = doc
             .rsplit("```toml\n")
             .next()
             .and_then(|s| s.split("```").next())
             .unwrap();
-        let scene = parse_scene_with(example, "example.toml", Path::new("."), quiet)
-            .unwrap_or_else(|e| panic!("{e}"));
+        let scene = parse_scene_with(example, "example.toml", Path::new("."), quiet).unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(scene.name, "cloth_on_a_block");
         assert_eq!(scene.objects.len(), 3);
         assert_eq!(scene.prescribed[0].nodes, 25);
@@ -1825,10 +1695,7 @@ material = { preset = "elastic_rubber_band", strain = { section_radius_m = 0.003
         let tet = d.tets.params(v.strain).unwrap();
         assert_eq!(tet.poissons_ratio, 0.45);
         assert_eq!(tet.strain_limit, f64::INFINITY);
-        assert_eq!(
-            tet.youngs_modulus,
-            VolumeMaterial::soft_rubber().strain.youngs_modulus
-        );
+        assert_eq!(tet.youngs_modulus, VolumeMaterial::soft_rubber().strain.youngs_modulus);
         let Some(SceneObject::Line(l)) = scene.object("l") else {
             panic!()
         };
@@ -2016,29 +1883,16 @@ material = { preset = "elastic_rubber_band", strain = { section_radius_m = 0.003
         assert_eq!(scene.simulation.settings.gravity_m_s2, [0.0, -9.81, 0.0]);
         assert_eq!(scene.prescribed[0].nodes, 2);
         let h = surface(&scene, "cloth");
-        let strain = scene
-            .simulation
-            .deformables
-            .triangles
-            .params(h.strain)
-            .unwrap();
+        let strain = scene.simulation.deformables.triangles.params(h.strain).unwrap();
         assert_eq!(strain.youngs_modulus, 1e4);
 
         let bad = json.replace("\"quads\": [4, 4]", "\"quads\": [4, 4], \"colour\": 1");
-        let e = scene_error(
-            parse_scene(&bad, "scene.json", Path::new("."))
-                .err()
-                .unwrap(),
-        );
+        let e = scene_error(parse_scene(&bad, "scene.json", Path::new(".")).err().unwrap());
         assert_eq!(e.line, Some(5), "{e}");
         assert!(e.to_string().starts_with("scene.json:5:"), "{e}");
         assert!(e.to_string().contains("unknown field `colour`"), "{e}");
         let bad = json.replace("\"youngs_modulus\": 1e4", "\"youngs_modulu\": 1e4");
-        let e = scene_error(
-            parse_scene(&bad, "scene.json", Path::new("."))
-                .err()
-                .unwrap(),
-        );
+        let e = scene_error(parse_scene(&bad, "scene.json", Path::new(".")).err().unwrap());
         assert!(
             e.to_string()
                 .contains("unknown field `youngs_modulu` in surface 'cloth' material.strain"),
@@ -2080,23 +1934,11 @@ motion = { velocity_m_s = [0.0, 0.3, 0.0] }
         let slide = scene.prescribed[1].clone();
         assert_eq!((twist.nodes, slide.nodes), (5, 5));
         let sim = &mut scene.simulation;
-        let reference: Vec<_> = sim
-            .deformables
-            .prescribed
-            .targets(twist.handle)
-            .unwrap()
-            .to_vec();
+        let reference: Vec<_> = sim.deformables.prescribed.targets(twist.handle).unwrap().to_vec();
         // The grid was turned into the XZ plane.
         assert!(reference.iter().all(|p| p.x == 0.25 && p.y.abs() < 1e-15));
         let motion = twist.motion.clone().unwrap();
-        for (t, tau) in [
-            (0.0, 0.0),
-            (0.5, 0.0),
-            (1.0, 0.5),
-            (1.25, 0.75),
-            (1.5, 1.0),
-            (3.0, 1.0),
-        ] {
+        for (t, tau) in [(0.0, 0.0), (0.5, 0.0), (1.0, 0.5), (1.25, 0.75), (1.5, 1.0), (3.0, 1.0)] {
             motion.apply(sim, twist.handle, t).unwrap();
             let (s, c) = (90.0f64 * tau).to_radians().sin_cos();
             let targets = sim.deformables.prescribed.targets(twist.handle).unwrap();
@@ -2107,12 +1949,7 @@ motion = { velocity_m_s = [0.0, 0.3, 0.0] }
             }
         }
         // Through the event: after one step the sliding edge's targets are at t = dt.
-        let slide_ref: Vec<_> = sim
-            .deformables
-            .prescribed
-            .targets(slide.handle)
-            .unwrap()
-            .to_vec();
+        let slide_ref: Vec<_> = sim.deformables.prescribed.targets(slide.handle).unwrap().to_vec();
         sim.step().unwrap();
         let t = sim.time();
         assert!(t > 0.0);
@@ -2124,15 +1961,10 @@ motion = { velocity_m_s = [0.0, 0.3, 0.0] }
 
     #[test]
     fn twisting_cloth_scene_follows_its_motions() {
-        let mut scene =
-            load_scene_with(&repo_scene("twisting_cloth_no_contact.toml"), quiet).unwrap();
+        let mut scene = load_scene_with(&repo_scene("twisting_cloth_no_contact.toml"), quiet).unwrap();
         assert_eq!(scene.simulation.gravity(), Vector3::zeros());
         assert_eq!(scene.duration_s, 2.0);
-        let edges: Vec<_> = scene
-            .prescribed
-            .iter()
-            .map(|p| (p.handle, p.nodes))
-            .collect();
+        let edges: Vec<_> = scene.prescribed.iter().map(|p| (p.handle, p.nodes)).collect();
         assert_eq!(edges.iter().map(|e| e.1).collect::<Vec<_>>(), vec![33, 33]);
         let sim = &mut scene.simulation;
         for _ in 0..3 {
@@ -2263,11 +2095,7 @@ to_m_s2 = [0.0, 0.0, -1.0]
         let sim = &mut scene.simulation;
         let knot = scene.attachments[1].1;
         // The rope's top node coincides with the cloth's corner (0.5, 0.5, 0).
-        let gap = sim
-            .deformables
-            .attachments
-            .max_gap_m(knot, &sim.nodes.x)
-            .unwrap();
+        let gap = sim.deformables.attachments.max_gap_m(knot, &sim.nodes.x).unwrap();
         assert_eq!(gap, 0.0);
         sim.step().unwrap();
         let t = sim.time();

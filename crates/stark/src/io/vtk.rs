@@ -276,15 +276,13 @@ impl<'a> VtkWriter<'a> {
 
     /// Adds a named per-point scalar field (one value per point).
     pub fn point_scalars(mut self, name: &'a str, values: &'a [f64]) -> Self {
-        self.point_data
-            .push((name, PointAttribute::Scalars(values)));
+        self.point_data.push((name, PointAttribute::Scalars(values)));
         self
     }
 
     /// Adds a named per-point 3-vector field (e.g. `velocity`), written as `VECTORS`.
     pub fn point_vectors(mut self, name: &'a str, values: &'a [Vector3<f64>]) -> Self {
-        self.point_data
-            .push((name, PointAttribute::Vectors(values)));
+        self.point_data.push((name, PointAttribute::Vectors(values)));
         self
     }
 
@@ -406,19 +404,14 @@ impl<'a> VtkWriter<'a> {
             k + 1,
         );
         out.text(&format!("CELL_TYPES {n_cells}\n"));
-        out.ints(
-            std::iter::repeat_n(self.cell_type().id() as usize, n_cells),
-            1,
-        );
+        out.ints(std::iter::repeat_n(self.cell_type().id() as usize, n_cells), 1);
 
         if n_points > 0 && !self.point_data.is_empty() {
             out.text(&format!("POINT_DATA {n_points}\n"));
             for (name, attribute) in &self.point_data {
                 match attribute {
                     PointAttribute::Scalars(values) => {
-                        out.text(&format!(
-                            "SCALARS {name} {type_name} 1\nLOOKUP_TABLE default\n"
-                        ));
+                        out.text(&format!("SCALARS {name} {type_name} 1\nLOOKUP_TABLE default\n"));
                         out.floats(values.iter().copied(), 1);
                     }
                     PointAttribute::Vectors(values) => {
@@ -431,9 +424,7 @@ impl<'a> VtkWriter<'a> {
         if n_cells > 0 && !self.cell_data.is_empty() {
             out.text(&format!("CELL_DATA {n_cells}\n"));
             for (name, values) in &self.cell_data {
-                out.text(&format!(
-                    "SCALARS {name} {type_name} 1\nLOOKUP_TABLE default\n"
-                ));
+                out.text(&format!("SCALARS {name} {type_name} 1\nLOOKUP_TABLE default\n"));
                 out.floats(values.iter().copied(), 1);
             }
         }
@@ -496,9 +487,7 @@ impl Encoder {
                 for v in values {
                     match self.precision {
                         VtkPrecision::Float64 => self.buf.extend_from_slice(&v.to_be_bytes()),
-                        VtkPrecision::Float32 => {
-                            self.buf.extend_from_slice(&(v as f32).to_be_bytes())
-                        }
+                        VtkPrecision::Float32 => self.buf.extend_from_slice(&(v as f32).to_be_bytes()),
                     }
                 }
                 self.buf.push(b'\n');
@@ -654,9 +643,7 @@ pub fn read_vtk(path: impl AsRef<Path>) -> Result<VtkMesh, VtkError> {
     let path = path.as_ref();
     let bytes = fs::read(path).map_err(|source| {
         if source.kind() == io::ErrorKind::NotFound {
-            VtkError::NotFound {
-                path: path.to_owned(),
-            }
+            VtkError::NotFound { path: path.to_owned() }
         } else {
             VtkError::Read {
                 path: path.to_owned(),
@@ -889,44 +876,37 @@ impl<'a> Parser<'a> {
     /// Reads `count` values of type `dtype` as `f64`.
     fn values(&mut self, count: usize, dtype: DType, what: &str) -> Result<Vec<f64>, VtkError> {
         if self.binary {
-            let n_bytes = count.checked_mul(dtype.size()).ok_or_else(|| {
-                self.invalid(self.line, format!("{what}: {count} values is too many"))
-            })?;
+            let n_bytes = count
+                .checked_mul(dtype.size())
+                .ok_or_else(|| self.invalid(self.line, format!("{what}: {count} values is too many")))?;
             let available = self.data.len() - self.pos;
             if available < n_bytes {
                 return Err(VtkError::UnexpectedEof {
                     file: self.file.to_owned(),
                     line: self.line,
-                    what: format!(
-                        "{what} ({count} binary values need {n_bytes} bytes, {available} left)"
-                    ),
+                    what: format!("{what} ({count} binary values need {n_bytes} bytes, {available} left)"),
                 });
             }
             let block = &self.data[self.pos..self.pos + n_bytes];
             self.line += block.iter().filter(|&&b| b == b'\n').count();
             self.pos += n_bytes;
-            Ok(block
-                .chunks_exact(dtype.size())
-                .map(|b| dtype.decode_be(b))
-                .collect())
+            Ok(block.chunks_exact(dtype.size()).map(|b| dtype.decode_be(b)).collect())
         } else {
             let mut out = Vec::with_capacity(count.min(1 << 24));
             while out.len() < count {
                 self.skip_blank();
                 if self.pos >= self.data.len() {
-                    return Err(self.eof(format!(
-                        "{what} (expected {count} values, found {})",
-                        out.len()
-                    )));
+                    return Err(self.eof(format!("{what} (expected {count} values, found {})", out.len())));
                 }
                 let start = self.pos;
                 while self.pos < self.data.len() && !self.data[self.pos].is_ascii_whitespace() {
                     self.pos += 1;
                 }
                 let token = String::from_utf8_lossy(&self.data[start..self.pos]);
-                let value = token.parse::<f64>().ok().filter(|v| {
-                    dtype.is_float() || (v.fract() == 0.0 && !token.contains(['.', 'e', 'E']))
-                });
+                let value = token
+                    .parse::<f64>()
+                    .ok()
+                    .filter(|v| dtype.is_float() || (v.fract() == 0.0 && !token.contains(['.', 'e', 'E'])));
                 match value {
                     Some(v) => out.push(v),
                     None => {
@@ -972,27 +952,16 @@ impl<'a> Parser<'a> {
         if !lower.starts_with("# vtk datafile version") {
             return Err(self.expected(first.0, "'# vtk DataFile Version x.x'", &first.1));
         }
-        let title = self
-            .raw_line()
-            .ok_or_else(|| self.eof("the title line"))?
-            .1
-            .to_owned();
-        let encoding = self
-            .keyword_line()
-            .ok_or_else(|| self.eof("the ASCII/BINARY line"))?;
+        let title = self.raw_line().ok_or_else(|| self.eof("the title line"))?.1.to_owned();
+        let encoding = self.keyword_line().ok_or_else(|| self.eof("the ASCII/BINARY line"))?;
         match encoding.1.trim().to_ascii_uppercase().as_str() {
             "ASCII" => self.binary = false,
             "BINARY" => self.binary = true,
             _ => return Err(self.expected(encoding.0, "ASCII or BINARY", &encoding.1)),
         }
-        let dataset = self
-            .keyword_line()
-            .ok_or_else(|| self.eof("the DATASET line"))?;
+        let dataset = self.keyword_line().ok_or_else(|| self.eof("the DATASET line"))?;
         let mut tokens = dataset.1.split_whitespace();
-        if !tokens
-            .next()
-            .is_some_and(|t| t.eq_ignore_ascii_case("DATASET"))
-        {
+        if !tokens.next().is_some_and(|t| t.eq_ignore_ascii_case("DATASET")) {
             return Err(self.expected(dataset.0, "DATASET UNSTRUCTURED_GRID", &dataset.1));
         }
         match tokens.next() {
@@ -1188,7 +1157,10 @@ impl<'a> Parser<'a> {
                 if types.len() != n_cells {
                     return Err(self.invalid(
                         types_line,
-                        format!("CELL_TYPES has {} entries but CELLS (line {cells_line}) has {n_cells} cells", types.len()),
+                        format!(
+                            "CELL_TYPES has {} entries but CELLS (line {cells_line}) has {n_cells} cells",
+                            types.len()
+                        ),
                     ));
                 }
                 for (i, &t) in types.iter().enumerate() {
@@ -1223,12 +1195,8 @@ impl<'a> Parser<'a> {
                     match cell_type {
                         VtkCellType::Vertex => mesh.vertices.push(nodes[0]),
                         VtkCellType::Line => mesh.segments.push([nodes[0], nodes[1]]),
-                        VtkCellType::Triangle => {
-                            mesh.triangles.push([nodes[0], nodes[1], nodes[2]])
-                        }
-                        VtkCellType::Tetra => {
-                            mesh.tets.push([nodes[0], nodes[1], nodes[2], nodes[3]])
-                        }
+                        VtkCellType::Triangle => mesh.triangles.push([nodes[0], nodes[1], nodes[2]]),
+                        VtkCellType::Tetra => mesh.tets.push([nodes[0], nodes[1], nodes[2], nodes[3]]),
                     }
                     mesh.cell_types.push(cell_type);
                 }
@@ -1270,10 +1238,7 @@ impl<'a> Parser<'a> {
         offsets.push(0);
         for i in 0..n_cells {
             let Some(&k) = raw.get(p) else {
-                return Err(self.invalid(
-                    line.0,
-                    format!("CELLS: size {size} ends before cell {i} of {n_cells}"),
-                ));
+                return Err(self.invalid(line.0, format!("CELLS: size {size} ends before cell {i} of {n_cells}")));
             };
             let Some(nodes) = raw.get(p + 1..p + 1 + k) else {
                 return Err(self.invalid(
@@ -1306,9 +1271,7 @@ impl<'a> Parser<'a> {
         let dtype = self.parse_dtype(&offsets_line, offsets_line.1.split_whitespace().nth(1))?;
         let offsets = self.values(n_offsets, dtype, "OFFSETS")?;
         let offsets = self.indices(&offsets, offsets_line.0, "OFFSETS")?;
-        let conn_line = self
-            .keyword_line()
-            .ok_or_else(|| self.eof("CONNECTIVITY"))?;
+        let conn_line = self.keyword_line().ok_or_else(|| self.eof("CONNECTIVITY"))?;
         if !conn_line
             .1
             .trim_start()
@@ -1321,10 +1284,7 @@ impl<'a> Parser<'a> {
         let connectivity = self.values(n_connectivity, dtype, "CONNECTIVITY")?;
         let connectivity = self.indices(&connectivity, conn_line.0, "CONNECTIVITY")?;
         let offsets = if offsets.is_empty() { vec![0] } else { offsets };
-        if offsets[0] != 0
-            || offsets.windows(2).any(|w| w[0] > w[1])
-            || *offsets.last().unwrap() != n_connectivity
-        {
+        if offsets[0] != 0 || offsets.windows(2).any(|w| w[0] > w[1]) || *offsets.last().unwrap() != n_connectivity {
             return Err(self.invalid(
                 offsets_line.0,
                 format!("OFFSETS must rise from 0 to the connectivity size {n_connectivity}"),
@@ -1368,27 +1328,15 @@ mod tests {
                 .cell_scalars("id", &tet_ids);
             let r = roundtrip(&writer);
             assert_eq!(r.title, "tet grid");
-            assert_eq!(
-                r.points, m.vertices,
-                "{encoding:?}: positions not bit-exact"
-            );
+            assert_eq!(r.points, m.vertices, "{encoding:?}: positions not bit-exact");
             assert_eq!(r.tets, m.elements);
             assert!(r.triangles.is_empty() && r.segments.is_empty() && r.vertices.is_empty());
+            assert_eq!(r.point_attribute("velocity").unwrap().as_vectors().unwrap(), velocity);
             assert_eq!(
-                r.point_attribute("velocity").unwrap().as_vectors().unwrap(),
-                velocity
-            );
-            assert_eq!(
-                r.point_attribute("temperature")
-                    .unwrap()
-                    .as_scalars()
-                    .unwrap(),
+                r.point_attribute("temperature").unwrap().as_scalars().unwrap(),
                 &temperature[..]
             );
-            assert_eq!(
-                r.cell_attribute("id").unwrap().as_scalars().unwrap(),
-                &tet_ids[..]
-            );
+            assert_eq!(r.cell_attribute("id").unwrap().as_scalars().unwrap(), &tet_ids[..]);
         }
     }
 
@@ -1397,17 +1345,13 @@ mod tests {
         let g = triangle_grid([0.0, 0.0], [1.0, 1.0], [3, 2], 0.25);
         let l = segment_line(Vector3::zeros(), Vector3::new(1.0, 1.0, 1.0), 5);
         for encoding in [VtkEncoding::Binary, VtkEncoding::Ascii] {
-            let r = roundtrip(
-                &VtkWriter::new(&g.vertices, VtkCells::Triangles(&g.elements)).encoding(encoding),
-            );
+            let r = roundtrip(&VtkWriter::new(&g.vertices, VtkCells::Triangles(&g.elements)).encoding(encoding));
             assert_eq!(
                 (r.points.clone(), r.triangles.clone()),
                 (g.vertices.clone(), g.elements.clone())
             );
             assert!(r.cell_types.iter().all(|&t| t == VtkCellType::Triangle));
-            let r = roundtrip(
-                &VtkWriter::new(&l.vertices, VtkCells::Segments(&l.elements)).encoding(encoding),
-            );
+            let r = roundtrip(&VtkWriter::new(&l.vertices, VtkCells::Segments(&l.elements)).encoding(encoding));
             assert_eq!(r.segments, l.elements);
             assert_eq!(r.points, l.vertices);
             let r = roundtrip(&VtkWriter::new(&l.vertices, VtkCells::Points).encoding(encoding));
@@ -1431,12 +1375,7 @@ mod tests {
                     .point_scalars("s", &s),
             );
             assert_eq!(r.points, points);
-            let back = r
-                .point_attribute("s")
-                .unwrap()
-                .as_scalars()
-                .unwrap()
-                .to_vec();
+            let back = r.point_attribute("s").unwrap().as_scalars().unwrap().to_vec();
             assert!(back[0].is_nan() && back[1] == f64::INFINITY && back[2] == -5e-324);
             let small = [Vector3::new(0.1, 0.2, 0.3)];
             let r = roundtrip(
@@ -1451,9 +1390,7 @@ mod tests {
             .precision(VtkPrecision::Float32)
             .to_bytes()
             .unwrap();
-        assert!(String::from_utf8(text)
-            .unwrap()
-            .contains("POINTS 1 float\n"));
+        assert!(String::from_utf8(text).unwrap().contains("POINTS 1 float\n"));
     }
 
     #[test]
@@ -1533,10 +1470,7 @@ mod tests {
         let missing = dir.path().join("nope.vtk");
         let err = read_vtk(&missing).unwrap_err();
         assert!(matches!(err, VtkError::NotFound { .. }));
-        assert_eq!(
-            err.to_string(),
-            format!("file '{}' not found", missing.display())
-        );
+        assert_eq!(err.to_string(), format!("file '{}' not found", missing.display()));
         let err = VtkWriter::new(&m.vertices, VtkCells::Points)
             .write(dir.path().join("no_dir/x.vtk"))
             .unwrap_err();
@@ -1545,8 +1479,7 @@ mod tests {
 
     #[test]
     fn reads_tolerant_ascii_with_comments_and_mixed_cells() {
-        let text =
-            "# vtk DataFile Version 3.0\nhand written\n\nascii\n  DATASET UNSTRUCTURED_GRID\n\
+        let text = "# vtk DataFile Version 3.0\nhand written\n\nascii\n  DATASET UNSTRUCTURED_GRID\n\
             # a comment line\n\
             POINTS 5 float\n0 0 0  1 0 0\n0 1 0\n0 0 1   1 1 1\n\n\
             CELLS 3 12\n4 0 1 2 3\n3 1 2 4\n2 0 4\n\
@@ -1583,21 +1516,15 @@ mod tests {
             r.point_attribute("v").unwrap().as_vectors().unwrap()[1],
             Vector3::new(2.0, 0.0, 0.0)
         );
-        assert_eq!(
-            r.point_attribute("s").unwrap().values,
-            vec![0.0, 1.0, 2.0, 3.0]
-        );
+        assert_eq!(r.point_attribute("s").unwrap().values, vec![0.0, 1.0, 2.0, 3.0]);
         assert_eq!(r.cell_attribute("c").unwrap().values, vec![1.5, 2.5]);
     }
 
     #[test]
     fn reads_version_5_binary() {
         let mut b: Vec<u8> =
-            b"# vtk DataFile Version 5.1\nx\nBINARY\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 double\n"
-                .to_vec();
-        for v in [
-            0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0f64,
-        ] {
+            b"# vtk DataFile Version 5.1\nx\nBINARY\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 double\n".to_vec();
+        for v in [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0f64] {
             b.extend_from_slice(&v.to_be_bytes());
         }
         b.extend_from_slice(b"\nCELLS 2 4\nOFFSETS vtktypeint64\n");
@@ -1618,16 +1545,11 @@ mod tests {
 
     #[test]
     fn parse_errors_name_file_and_line() {
-        let good =
-            "# vtk DataFile Version 4.2\nt\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 double\n\
+        let good = "# vtk DataFile Version 4.2\nt\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 double\n\
             0 0 0\n1 0 0\n0 1 0\n0 0 1\nCELLS 1 5\n4 0 1 2 3\nCELL_TYPES 1\n10\n";
         assert!(parse_vtk(good.as_bytes(), "box.vtk").is_ok());
 
-        let err = |text: &str| {
-            parse_vtk(text.as_bytes(), "box.vtk")
-                .unwrap_err()
-                .to_string()
-        };
+        let err = |text: &str| parse_vtk(text.as_bytes(), "box.vtk").unwrap_err().to_string();
 
         assert_eq!(
             err(&good.replace("CELL_TYPES 1\n10\n", "POINT_DATA 4\n")),
@@ -1654,7 +1576,10 @@ mod tests {
             "'box.vtk' line 9: expected a number as value 11 of POINTS, found 'zero'"
         );
         let cut = &good[..good.find("0 1 0\n").unwrap()];
-        assert_eq!(err(cut), "'box.vtk' line 7: unexpected end of file while reading POINTS (expected 12 values, found 6)");
+        assert_eq!(
+            err(cut),
+            "'box.vtk' line 7: unexpected end of file while reading POINTS (expected 12 values, found 6)"
+        );
         assert_eq!(
             err("hello\n"),
             "'box.vtk' line 1: expected '# vtk DataFile Version x.x', found 'hello'"
@@ -1693,14 +1618,17 @@ mod tests {
             assert!(
                 matches!(
                     e,
-                    VtkError::UnexpectedEof { .. }
-                        | VtkError::Expected { .. }
-                        | VtkError::Invalid { .. }
+                    VtkError::UnexpectedEof { .. } | VtkError::Expected { .. } | VtkError::Invalid { .. }
                 ),
                 "cut {cut}: {e}"
             );
         }
         let e = parse_vtk(&bytes[..200], "cut.vtk").unwrap_err().to_string();
-        assert!(e.starts_with("'cut.vtk' line 6: unexpected end of file while reading POINTS (27 binary values need 216 bytes"), "{e}");
+        assert!(
+            e.starts_with(
+                "'cut.vtk' line 6: unexpected end of file while reading POINTS (27 binary values need 216 bytes"
+            ),
+            "{e}"
+        );
     }
 }

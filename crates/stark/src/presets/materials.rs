@@ -2,8 +2,7 @@
 //! bundles of energy parameters that make up a line, a surface or a volume.
 
 use crate::deformables::{
-    DihedralBendingParams, FlatBendingParams, InertiaParams, SegmentStrainParams, TetStrainParams,
-    TriangleStrainParams,
+    DihedralBendingParams, FlatBendingParams, InertiaParams, SegmentStrainParams, TetStrainParams, TriangleStrainParams,
 };
 use serde::{Deserialize, Serialize};
 
@@ -28,6 +27,8 @@ pub struct LineMaterial {
     pub inertia: InertiaParams,
     /// Axial strain.
     pub strain: SegmentStrainParams,
+    /// Contact thickness, m; `None` uses `settings.contact.default_thickness_m` (default: none).
+    pub contact_thickness_m: Option<f64>,
 }
 
 /// Material of a shell or cloth made of triangles.
@@ -40,6 +41,8 @@ pub struct SurfaceMaterial {
     pub strain: TriangleStrainParams,
     /// Bending.
     pub bending: Bending,
+    /// Contact thickness, m; `None` uses `settings.contact.default_thickness_m` (default: none).
+    pub contact_thickness_m: Option<f64>,
 }
 
 /// Material of a volumetric solid made of tetrahedra.
@@ -51,6 +54,8 @@ pub struct VolumeMaterial {
     pub inertia: InertiaParams,
     /// Volumetric strain.
     pub strain: TetStrainParams,
+    /// Contact thickness, m; `None` uses `settings.contact.default_thickness_m` (default: none).
+    pub contact_thickness_m: Option<f64>,
 }
 
 impl Default for SurfaceMaterial {
@@ -59,6 +64,7 @@ impl Default for SurfaceMaterial {
             inertia: InertiaParams::default(),
             strain: TriangleStrainParams::default(),
             bending: Bending::Flat(FlatBendingParams::default()),
+            contact_thickness_m: None,
         }
     }
 }
@@ -81,6 +87,7 @@ impl LineMaterial {
                 strain_limit_stiffness: 1e5,
                 scale: 1.0,
             },
+            contact_thickness_m: None,
         }
     }
 }
@@ -112,6 +119,7 @@ impl SurfaceMaterial {
                 stiffness: 1e-6,
                 damping: 1e-7,
             }),
+            contact_thickness_m: None,
         }
     }
 }
@@ -134,6 +142,7 @@ impl VolumeMaterial {
                 strain_limit_stiffness: 1e2,
                 scale: 1.0,
             },
+            contact_thickness_m: None,
         }
     }
 }

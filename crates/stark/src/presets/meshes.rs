@@ -69,11 +69,7 @@ pub fn triangle_grid(center: [f64; 2], size: [f64; 2], quads: [usize; 2], z: f64
     let mut vertices = Vec::with_capacity(nx * ny);
     for i in 0..nx {
         for j in 0..ny {
-            vertices.push(Vector3::new(
-                bottom[0] + i as f64 * dx,
-                bottom[1] + j as f64 * dy,
-                z,
-            ));
+            vertices.push(Vector3::new(bottom[0] + i as f64 * dx, bottom[1] + j as f64 * dy, z));
         }
     }
 
@@ -250,9 +246,7 @@ pub fn tet_grid(center: Vector3<f64>, size: Vector3<f64>, hexes: [usize; 3]) -> 
     for ei in 0..hx {
         for ej in 0..hy {
             for ek in 0..hz {
-                let corner = |di: usize, dj: usize, dk: usize| {
-                    nz * ny * (ei + di) + nz * (ej + dj) + (ek + dk)
-                };
+                let corner = |di: usize, dj: usize, dk: usize| nz * ny * (ei + di) + nz * (ej + dj) + (ek + dk);
                 let nodes = [
                     corner(0, 0, 0),
                     corner(0, 0, 1),
@@ -432,12 +426,7 @@ pub fn cylinder_mesh(radius: f64, height: f64, slices: usize, stacks: usize) -> 
     let mut elements = Vec::with_capacity(2 * slices * stacks + 2 * slices);
     for j in 0..stacks {
         for i in 0..slices {
-            let (a, b, c, d) = (
-                ring(j, i),
-                ring(j, i + 1),
-                ring(j + 1, i + 1),
-                ring(j + 1, i),
-            );
+            let (a, b, c, d) = (ring(j, i), ring(j, i + 1), ring(j + 1, i + 1), ring(j + 1, i));
             elements.push([a, b, c]);
             elements.push([a, c, d]);
         }
@@ -465,12 +454,7 @@ pub fn cylinder_mesh(radius: f64, height: f64, slices: usize, stacks: usize) -> 
 ///
 /// # Panics
 /// If either segment count is below 3.
-pub fn torus_mesh(
-    major_radius: f64,
-    minor_radius: f64,
-    major_segments: usize,
-    minor_segments: usize,
-) -> Mesh<3> {
+pub fn torus_mesh(major_radius: f64, minor_radius: f64, major_segments: usize, minor_segments: usize) -> Mesh<3> {
     assert!(
         major_segments >= 3 && minor_segments >= 3,
         "torus_mesh: need at least 3 segments each way, got {major_segments} and {minor_segments}"
@@ -521,21 +505,14 @@ mod tests {
     fn assert_watertight(m: &Mesh<3>) {
         let mut directed: HashMap<[usize; 2], usize> = HashMap::new();
         for (ti, t) in m.elements.iter().enumerate() {
-            assert!(
-                t[0] != t[1] && t[1] != t[2] && t[0] != t[2],
-                "triangle {ti} degenerate"
-            );
+            assert!(t[0] != t[1] && t[1] != t[2] && t[0] != t[2], "triangle {ti} degenerate");
             for k in 0..3 {
                 *directed.entry([t[k], t[(k + 1) % 3]]).or_default() += 1;
             }
         }
         for (&[a, b], &n) in &directed {
             assert_eq!(n, 1, "directed edge ({a}, {b}) used {n} times");
-            assert_eq!(
-                directed.get(&[b, a]),
-                Some(&1),
-                "edge ({a}, {b}) has no twin"
-            );
+            assert_eq!(directed.get(&[b, a]), Some(&1), "edge ({a}, {b}) has no twin");
         }
         let mut used = vec![false; m.vertices.len()];
         m.elements.iter().flatten().for_each(|&i| used[i] = true);
@@ -714,10 +691,7 @@ mod tests {
         let m = cylindrical_triangle_grid(1.0, 2.0, [4, 2]);
         assert_eq!(m.vertices.len(), 12);
         assert_eq!(m.elements.len(), 16);
-        assert_eq!(
-            &m.elements[..4],
-            &[[0, 3, 4], [0, 4, 1], [1, 4, 2], [4, 5, 2]]
-        );
+        assert_eq!(&m.elements[..4], &[[0, 3, 4], [0, 4, 1], [1, 4, 2], [4, 5, 2]]);
         // Wrap-around quad (i = 3, j = 0): odd.
         assert_eq!(m.elements[12], [9, 0, 10]);
         for t in &m.elements {

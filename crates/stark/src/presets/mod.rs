@@ -3,12 +3,12 @@
 pub mod meshes;
 
 pub use meshes::{
-    box_mesh, cylinder_mesh, cylindrical_triangle_grid, segment_line, sphere_mesh, tet_grid,
-    torus_mesh, triangle_grid, Mesh, SegmentMesh, TetMesh, TriangleMesh,
+    box_mesh, cylinder_mesh, cylindrical_triangle_grid, segment_line, sphere_mesh, tet_grid, torus_mesh, triangle_grid,
+    Mesh, SegmentMesh, TetMesh, TriangleMesh,
 };
 
 pub mod materials;
 pub mod objects;
 
 pub use materials::{Bending, LineMaterial, SurfaceMaterial, VolumeMaterial};
-pub use objects::{LineHandle, SurfaceHandle, VolumeHandle};
+pub use objects::{LineHandle, ObstacleHandle, SurfaceHandle, VolumeHandle};

@@ -2,9 +2,10 @@
 
 use super::materials::{Bending, LineMaterial, SurfaceMaterial, VolumeMaterial};
 use super::meshes;
+use crate::contact::ContactHandle;
 use crate::deformables::{
-    DihedralBendingHandle, FlatBendingHandle, InertiaHandle, NodeSetHandle, PrescribedHandle,
-    PrescribedParams, SegmentStrainHandle, TetStrainHandle, TriangleStrainHandle,
+    DihedralBendingHandle, FlatBendingHandle, InertiaHandle, NodeSetHandle, PrescribedHandle, PrescribedParams,
+    SegmentStrainHandle, TetStrainHandle, TriangleStrainHandle,
 };
 use crate::error::{Result, StarkError};
 use crate::geometry::mesh;
@@ -22,6 +23,8 @@ pub struct LineHandle {
     pub inertia: InertiaHandle,
     /// Its segment strain.
     pub strain: SegmentStrainHandle,
+    /// Its contact object, if it has a contact thickness.
+    pub contact: Option<ContactHandle>,
 }
 
 /// Bending handle of a surface.
@@ -44,6 +47,8 @@ pub struct SurfaceHandle {
     pub strain: TriangleStrainHandle,
     /// Its bending, if any.
     pub bending: Option<BendingHandle>,
+    /// Its contact object, if it has a contact thickness.
+    pub contact: Option<ContactHandle>,
 }
 
 /// Handles of a volume object.
@@ -55,6 +60,19 @@ pub struct VolumeHandle {
     pub inertia: InertiaHandle,
     /// Its tet strain.
     pub strain: TetStrainHandle,
+    /// Its contact object (its boundary surface), if it has a contact thickness.
+    pub contact: Option<ContactHandle>,
+}
+
+/// Handles of a kinematic obstacle (a surface whose nodes all follow prescribed targets).
+#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
+pub struct ObstacleHandle {
+    /// Its nodes.
+    pub nodes: NodeSetHandle,
+    /// The prescribed positions moving it (`set_transform` on this handle moves the obstacle).
+    pub prescribed: PrescribedHandle,
+    /// Its contact object.
+    pub contact: ContactHandle,
 }
 
 fn per_node(
@@ -76,6 +94,25 @@ fn per_node(
 }
 
 impl Simulation {
+    /// Register a contact surface for an object if a thickness is given or defaulted.
+    fn register_contact(
+        &mut self,
+        label: &str,
+        nodes: NodeSetHandle,
+        triangles: &[[usize; 3]],
+        edges: &[[usize; 2]],
+        points: &[usize],
+        thickness_m: Option<f64>,
+    ) -> Result<Option<ContactHandle>> {
+        let Some(thickness) = thickness_m.or(self.settings.contact.default_thickness_m) else {
+            return Ok(None);
+        };
+        let rest = self.nodes.rest.clone();
+        self.contact
+            .add_object(label, nodes, &rest, triangles, edges, points, thickness)
+            .map(Some)
+    }
+
     /// A rod or cable: nodes, segment strain and inertia lumped from segment lengths.
     pub fn add_line(
         &mut self,
@@ -86,35 +123,32 @@ impl Simulation {
     ) -> Result<LineHandle> {
         material.inertia.validate(label)?;
         let nodes = self.add_nodes(label, vertices)?;
-        let strain = self.deformables.segments.add(
-            &self.nodes,
-            nodes,
-            label,
-            segments,
-            material.strain.clone(),
-        )?;
+        let strain = self
+            .deformables
+            .segments
+            .add(&self.nodes, nodes, label, segments, material.strain.clone())?;
         let measures = per_node(
             vertices.len(),
             label,
             "segment",
             segments.iter().flat_map(|s| {
-                let l = (vertices[s[0].min(vertices.len() - 1)]
-                    - vertices[s[1].min(vertices.len() - 1)])
-                .norm()
-                    / 2.0;
+                let l = (vertices[s[0].min(vertices.len() - 1)] - vertices[s[1].min(vertices.len() - 1)]).norm() / 2.0;
                 [(s[0], l), (s[1], l)]
             }),
         )?;
-        let inertia =
-            self.deformables
-                .inertia
-                .add(nodes, label, &measures, material.inertia.clone())?;
+        let inertia = self
+            .deformables
+            .inertia
+            .add(nodes, label, &measures, material.inertia.clone())?;
+        let points: Vec<usize> = (0..vertices.len()).collect();
+        let contact = self.register_contact(label, nodes, &[], segments, &points, material.contact_thickness_m)?;
         self.output
             .add_mesh(label, nodes, OutputCells::Segments(segments.to_vec()));
         Ok(LineHandle {
             nodes,
             inertia,
             strain,
+            contact,
         })
     }
 
@@ -146,13 +180,10 @@ impl Simulation {
     ) -> Result<SurfaceHandle> {
         material.inertia.validate(label)?;
         let nodes = self.add_nodes(label, vertices)?;
-        let strain = self.deformables.triangles.add(
-            &self.nodes,
-            nodes,
-            label,
-            triangles,
-            material.strain.clone(),
-        )?;
+        let strain = self
+            .deformables
+            .triangles
+            .add(&self.nodes, nodes, label, triangles, material.strain.clone())?;
         let bending = match &material.bending {
             Bending::None => None,
             Bending::Flat(p) => Some(BendingHandle::Flat(self.deformables.flat_bending.add(
@@ -162,30 +193,30 @@ impl Simulation {
                 triangles,
                 p.clone(),
             )?)),
-            Bending::Dihedral(p) => Some(BendingHandle::Dihedral(
-                self.deformables.dihedral_bending.add(
-                    &self.nodes,
-                    nodes,
-                    label,
-                    triangles,
-                    p.clone(),
-                )?,
-            )),
+            Bending::Dihedral(p) => Some(BendingHandle::Dihedral(self.deformables.dihedral_bending.add(
+                &self.nodes,
+                nodes,
+                label,
+                triangles,
+                p.clone(),
+            )?)),
         };
         let measures = per_node(
             vertices.len(),
             label,
             "triangle",
             triangles.iter().flat_map(|t| {
-                let a =
-                    mesh::triangle_area(&vertices[t[0]], &vertices[t[1]], &vertices[t[2]]) / 3.0;
+                let a = mesh::triangle_area(&vertices[t[0]], &vertices[t[1]], &vertices[t[2]]) / 3.0;
                 [(t[0], a), (t[1], a), (t[2], a)]
             }),
         )?;
-        let inertia =
-            self.deformables
-                .inertia
-                .add(nodes, label, &measures, material.inertia.clone())?;
+        let inertia = self
+            .deformables
+            .inertia
+            .add(nodes, label, &measures, material.inertia.clone())?;
+        let points: Vec<usize> = (0..vertices.len()).collect();
+        let edges = mesh::edges_from_triangles(triangles);
+        let contact = self.register_contact(label, nodes, triangles, &edges, &points, material.contact_thickness_m)?;
         self.output
             .add_mesh(label, nodes, OutputCells::Triangles(triangles.to_vec()));
         Ok(SurfaceHandle {
@@ -193,6 +224,7 @@ impl Simulation {
             inertia,
             strain,
             bending,
+            contact,
         })
     }
 
@@ -206,7 +238,9 @@ impl Simulation {
         material: &SurfaceMaterial,
     ) -> Result<SurfaceHandle> {
         if quads.contains(&0) || !(size[0] > 0.0 && size[1] > 0.0) {
-            return Err(StarkError::InvalidInput(format!("surface grid '{label}' needs positive size and quad counts, got {size:?} and {quads:?}")));
+            return Err(StarkError::InvalidInput(format!(
+                "surface grid '{label}' needs positive size and quad counts, got {size:?} and {quads:?}"
+            )));
         }
         let m = meshes::triangle_grid([0.0, 0.0], size, quads, 0.0);
         self.add_surface(label, &m.vertices, &m.elements, material)
@@ -223,34 +257,45 @@ impl Simulation {
     ) -> Result<VolumeHandle> {
         material.inertia.validate(label)?;
         let nodes = self.add_nodes(label, vertices)?;
-        let strain =
-            self.deformables
-                .tets
-                .add(&self.nodes, nodes, label, tets, material.strain.clone())?;
+        let strain = self
+            .deformables
+            .tets
+            .add(&self.nodes, nodes, label, tets, material.strain.clone())?;
         let measures = per_node(
             vertices.len(),
             label,
             "tet",
             tets.iter().flat_map(|t| {
-                let v = mesh::tet_signed_volume(
-                    &vertices[t[0]],
-                    &vertices[t[1]],
-                    &vertices[t[2]],
-                    &vertices[t[3]],
-                ) / 4.0;
+                let v =
+                    mesh::tet_signed_volume(&vertices[t[0]], &vertices[t[1]], &vertices[t[2]], &vertices[t[3]]) / 4.0;
                 [(t[0], v), (t[1], v), (t[2], v), (t[3], v)]
             }),
         )?;
-        let inertia =
-            self.deformables
-                .inertia
-                .add(nodes, label, &measures, material.inertia.clone())?;
-        self.output
-            .add_mesh(label, nodes, OutputCells::Tets(tets.to_vec()));
+        let inertia = self
+            .deformables
+            .inertia
+            .add(nodes, label, &measures, material.inertia.clone())?;
+        let contact = if material
+            .contact_thickness_m
+            .or(self.settings.contact.default_thickness_m)
+            .is_some()
+        {
+            let surface = mesh::find_surface_triangles(tets)
+                .map_err(|e| StarkError::InvalidInput(format!("surface of '{label}': {e}")))?;
+            let edges = mesh::edges_from_triangles(&surface);
+            let mut points: Vec<usize> = surface.iter().flatten().copied().collect();
+            points.sort_unstable();
+            points.dedup();
+            self.register_contact(label, nodes, &surface, &edges, &points, material.contact_thickness_m)?
+        } else {
+            None
+        };
+        self.output.add_mesh(label, nodes, OutputCells::Tets(tets.to_vec()));
         Ok(VolumeHandle {
             nodes,
             inertia,
             strain,
+            contact,
         })
     }
 
@@ -264,10 +309,47 @@ impl Simulation {
         material: &VolumeMaterial,
     ) -> Result<VolumeHandle> {
         if hexes.contains(&0) || !size.iter().all(|s| *s > 0.0) {
-            return Err(StarkError::InvalidInput(format!("volume grid '{label}' needs positive size and cell counts, got {size:?} and {hexes:?}")));
+            return Err(StarkError::InvalidInput(format!(
+                "volume grid '{label}' needs positive size and cell counts, got {size:?} and {hexes:?}"
+            )));
         }
         let m = meshes::tet_grid(Vector3::zeros(), Vector3::from(size), hexes);
         self.add_volume(label, &m.vertices, &m.elements, material)
+    }
+
+    /// A kinematic obstacle: a triangle surface whose nodes all follow prescribed targets (stiff
+    /// springs of `stiffness` N/m, hardened to 1e-4 of the contact thickness). Move it with
+    /// `deformables.prescribed.set_transform(handle.prescribed, …)`. Its self-collision is off.
+    pub fn add_prescribed_surface(
+        &mut self,
+        label: &str,
+        vertices: &[Vector3<f64>],
+        triangles: &[[usize; 3]],
+        thickness_m: f64,
+        stiffness: f64,
+    ) -> Result<ObstacleHandle> {
+        let nodes = self.add_nodes(label, vertices)?;
+        let all: Vec<usize> = (0..vertices.len()).collect();
+        let params = PrescribedParams {
+            stiffness,
+            tolerance_m: 1e-4 * thickness_m,
+        };
+        let prescribed = self
+            .deformables
+            .prescribed
+            .add(&self.nodes, nodes, label, &all, params)?;
+        let edges = mesh::edges_from_triangles(triangles);
+        let contact = self
+            .register_contact(label, nodes, triangles, &edges, &all, Some(thickness_m))?
+            .expect("thickness given");
+        self.contact.disable_collision(contact, contact)?;
+        self.output
+            .add_mesh(label, nodes, OutputCells::Triangles(triangles.to_vec()));
+        Ok(ObstacleHandle {
+            nodes,
+            prescribed,
+            contact,
+        })
     }
 
     /// Prescribe the nodes of `set` inside the axis-aligned box of `center` and full `size` (m).
@@ -280,15 +362,10 @@ impl Simulation {
         params: PrescribedParams,
     ) -> Result<PrescribedHandle> {
         let label = self.deformables.sets[set.index as usize].0.clone();
-        let (h, n) = self.deformables.prescribed.add_in_box(
-            &self.nodes,
-            set,
-            &label,
-            center,
-            size,
-            true,
-            params,
-        )?;
+        let (h, n) = self
+            .deformables
+            .prescribed
+            .add_in_box(&self.nodes, set, &label, center, size, true, params)?;
         if n == 0 {
             return Err(StarkError::InvalidInput(format!(
                 "the box at {center:?} of size {size:?} contains no node of '{label}'"

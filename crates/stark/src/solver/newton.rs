@@ -138,10 +138,7 @@ fn total_energy(terms: &[&mut dyn EnergyTerm], state: &EvalState) -> f64 {
 }
 
 fn max_step(terms: &[&mut dyn EnergyTerm], from: &EvalState, to: &EvalState) -> f64 {
-    terms
-        .iter()
-        .map(|t| t.max_step_fraction(from, to))
-        .fold(1.0, f64::min)
+    terms.iter().map(|t| t.max_step_fraction(from, to)).fold(1.0, f64::min)
 }
 
 fn axpy_velocities(base: &[Vector3<f64>], step: &[f64], alpha: f64, out: &mut Vec<Vector3<f64>>) {
@@ -216,25 +213,20 @@ pub fn solve(
         loop {
             let t1 = Instant::now();
             let state = problem.state(v, &ws.x);
-            let shared: Vec<&dyn EnergyTerm> =
-                terms.iter().map(|t| &**t as &dyn EnergyTerm).collect();
+            let shared: Vec<&dyn EnergyTerm> = terms.iter().map(|t| &**t as &dyn EnergyTerm).collect();
             let mode = if project {
                 EvalMode::ProjectedHessian
             } else {
                 EvalMode::ExactHessian
             };
-            (energy, energy_scale) =
-                ws.assembler
-                    .assemble(&shared, &state, n, mode, &mut ws.gradient);
+            (energy, energy_scale) = ws.assembler.assemble(&shared, &state, n, mode, &mut ws.gradient);
             report.times.evaluation_s += t1.elapsed().as_secs_f64();
             if !energy.is_finite() || ws.gradient.iter().any(|g| !g.is_finite()) {
                 let culprit = shared
                     .iter()
                     .find(|t| !t.energy(&state).is_finite())
                     .map(|t| t.name().to_string());
-                return Err(NewtonFailure::NonFinite(
-                    culprit.unwrap_or_else(|| "gradient".into()),
-                ));
+                return Err(NewtonFailure::NonFinite(culprit.unwrap_or_else(|| "gradient".into())));
             }
             residual = norm_inf(&ws.gradient) / dt;
             report.residual_n = residual;
@@ -265,13 +257,7 @@ pub fn solve(
                 let g_norm = dot(&ws.gradient, &ws.gradient).sqrt();
                 let eta = settings.cg_relative_tolerance.min((residual / r0).sqrt());
                 let tol = (eta * g_norm).max(0.1 * settings.residual_tolerance_n * dt);
-                let info = pcg::solve(
-                    matrix,
-                    &ws.rhs,
-                    &mut ws.step,
-                    tol,
-                    settings.cg_max_iterations,
-                );
+                let info = pcg::solve(matrix, &ws.rhs, &mut ws.step, tol, settings.cg_max_iterations);
                 report.cg_iterations += info.iterations;
                 indefinite = info.indefinite;
             }
@@ -290,9 +276,7 @@ pub fn solve(
                 let inv = pcg::block_jacobi(matrix);
                 for (b, m) in inv.iter().enumerate() {
                     for i in 0..3 {
-                        ws.step[3 * b + i] = -(0..3)
-                            .map(|j| m[3 * i + j] * ws.gradient[3 * b + j])
-                            .sum::<f64>();
+                        ws.step[3 * b + i] = -(0..3).map(|j| m[3 * i + j] * ws.gradient[3 * b + j]).sum::<f64>();
                     }
                 }
                 descent = dot(&ws.gradient, &ws.step);

@@ -118,6 +118,8 @@ pub struct Settings {
     pub newton: NewtonSettings,
     /// Output.
     pub output: OutputSettings,
+    /// Contact.
+    pub contact: crate::contact::ContactSettings,
     /// Largest number of times one step is repeated after a model hardened a stiffness
     /// (default: 40).
     pub max_hardening_retries: usize,
@@ -135,6 +137,7 @@ impl Default for Settings {
             threads: 0,
             newton: NewtonSettings::default(),
             output: OutputSettings::default(),
+            contact: crate::contact::ContactSettings::default(),
             max_hardening_retries: 40,
         }
     }

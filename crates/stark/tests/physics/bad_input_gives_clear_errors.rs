@@ -24,10 +24,7 @@ fn bad_input_gives_clear_errors() {
         .add_volume("cup", &tet(), &[[0, 2, 1, 3]], &m)
         .unwrap_err()
         .to_string();
-    assert!(
-        err.contains("tet 0 of 'cup'") && err.contains("inverted"),
-        "{err}"
-    );
+    assert!(err.contains("tet 0 of 'cup'") && err.contains("inverted"), "{err}");
     let flat = vec![
         Vector3::zeros(),
         Vector3::x(),
@@ -46,10 +43,7 @@ fn bad_input_gives_clear_errors() {
             .add_volume("jelly", &tet(), &[[0, 1, 2, 3]], &bad)
             .unwrap_err()
             .to_string();
-        assert!(
-            err.contains(&format!("`youngs_modulus` = {what} on 'jelly'")),
-            "{err}"
-        );
+        assert!(err.contains(&format!("`youngs_modulus` = {what} on 'jelly'")), "{err}");
     }
     let err = stark::io::load_mesh("definitely/missing/cup.obj")
         .unwrap_err()

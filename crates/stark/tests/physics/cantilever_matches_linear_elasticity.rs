@@ -79,10 +79,7 @@ const SECTION_CELLS: [usize; 4] = [1, 2, 4, 8];
 /// Lamé parameters `(μ, λ)` of E and ν, Pa (written out here, not taken from the crate).
 fn lame() -> (f64, f64) {
     let (e, nu) = (YOUNGS_MODULUS_PA, POISSONS_RATIO);
-    (
-        e / (2.0 * (1.0 + nu)),
-        e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)),
-    )
+    (e / (2.0 * (1.0 + nu)), e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)))
 }
 
 /// Total tip force F (N) with `F L³ / (3 E I)` = [`EULER_BERNOULLI_DEFLECTION_M`].
@@ -129,14 +126,7 @@ fn kuhn_grid(cells: [usize; 3]) -> TetMesh {
             }
         }
     }
-    const ORDERS: [[usize; 3]; 6] = [
-        [0, 1, 2],
-        [0, 2, 1],
-        [1, 0, 2],
-        [1, 2, 0],
-        [2, 0, 1],
-        [2, 1, 0],
-    ];
+    const ORDERS: [[usize; 3]; 6] = [[0, 1, 2], [0, 2, 1], [1, 0, 2], [1, 2, 0], [2, 0, 1], [2, 1, 0]];
     let mut elements = Vec::with_capacity(6 * nx * ny * nz);
     for i in 0..nx {
         for j in 0..ny {
@@ -257,9 +247,7 @@ impl BandMatrix {
         }
         for i in (0..self.n).rev() {
             let last = (i + self.bw).min(self.n - 1);
-            let dot: f64 = (i + 1..=last)
-                .map(|k| self.lower[self.at(k, i)] * b[k])
-                .sum();
+            let dot: f64 = (i + 1..=last).map(|k| self.lower[self.at(k, i)] * b[k]).sum();
             b[i] = (b[i] - dot) / self.lower[self.at(i, i)];
         }
     }
@@ -276,12 +264,7 @@ enum Clamp {
 
 /// Displacements of the small-strain linear-elastic solve `K u = f` with the `clamped` nodes held
 /// as `clamp` says.
-fn linear_displacements(
-    mesh: &TetMesh,
-    forces: &[Vector3<f64>],
-    clamped: &[bool],
-    clamp: Clamp,
-) -> Vec<Vector3<f64>> {
+fn linear_displacements(mesh: &TetMesh, forces: &[Vector3<f64>], clamped: &[bool], clamp: Clamp) -> Vec<Vector3<f64>> {
     let (mu, lambda) = lame();
     let eliminated = |v: usize| clamped[v] && matches!(clamp, Clamp::Fixed);
     // Number free DOFs slab by slab along the beam so that the band stays narrow.
@@ -382,6 +365,7 @@ fn simulate(mesh: &TetMesh, forces: &[Vector3<f64>], clamped_nodes: usize) -> Si
             poissons_ratio: POISSONS_RATIO,
             ..Default::default()
         },
+        contact_thickness_m: None,
     };
     let mut sim = Simulation::new(settings).unwrap();
     let beam = sim
@@ -408,11 +392,7 @@ fn simulate(mesh: &TetMesh, forces: &[Vector3<f64>], clamped_nodes: usize) -> Si
     }
     let report = sim.step().unwrap();
     assert_eq!(report.converged_by, ConvergedBy::Residual);
-    let clamp_violation_m = sim
-        .deformables
-        .prescribed
-        .max_violation_m(clamp, &sim.nodes.x)
-        .unwrap();
+    let clamp_violation_m = sim.deformables.prescribed.max_violation_m(clamp, &sim.nodes.x).unwrap();
     SimulatorRun {
         displacements: sim
             .positions(beam.nodes)
@@ -490,8 +470,7 @@ fn check_cantilever(split: Split, expected: &[(usize, f64)]) {
         for &i in &tip {
             forces[i] = Vector3::new(0.0, 0.0, -load * weight(i) / total_weight);
         }
-        let tip_deflection =
-            |u: &[Vector3<f64>]| -tip.iter().map(|&i| u[i].z).sum::<f64>() / tip.len() as f64;
+        let tip_deflection = |u: &[Vector3<f64>]| -tip.iter().map(|&i| u[i].z).sum::<f64>() / tip.len() as f64;
 
         let run = simulate(&mesh, &forces, clamped.iter().filter(|c| **c).count());
         let springs = Clamp::Springs(CLAMP_STIFFNESS_N_M);
@@ -499,15 +478,8 @@ fn check_cantilever(split: Split, expected: &[(usize, f64)]) {
             cells_along: cells[0],
             tets: mesh.elements.len(),
             simulator: tip_deflection(&run.displacements),
-            linear: tip_deflection(&linear_displacements(
-                &mesh,
-                &forces,
-                &clamped,
-                Clamp::Fixed,
-            )),
-            linear_springs: tip_deflection(&linear_displacements(
-                &mesh, &forces, &clamped, springs,
-            )),
+            linear: tip_deflection(&linear_displacements(&mesh, &forces, &clamped, Clamp::Fixed)),
+            linear_springs: tip_deflection(&linear_displacements(&mesh, &forces, &clamped, springs)),
         };
         writeln!(
             table,
@@ -628,6 +600,7 @@ fn stable_neo_hookean_hessian_at_rest_is_the_linear_elastic_stiffness() {
             poissons_ratio: POISSONS_RATIO,
             ..Default::default()
         },
+        contact_thickness_m: None,
     };
     sim.add_volume("cell", &mesh.vertices, &mesh.elements, &material)
         .unwrap();
@@ -661,9 +634,7 @@ fn stable_neo_hookean_hessian_at_rest_is_the_linear_elastic_stiffness() {
                 "tet {e}: {path} Hessian at rest differs from V BᵀDB by {err:e} (scale {scale:e})"
             );
             assert!(
-                d.gradient_flat()
-                    .iter()
-                    .all(|g| g.abs() < 1e-10 * scale * SIDE_M),
+                d.gradient_flat().iter().all(|g| g.abs() < 1e-10 * scale * SIDE_M),
                 "tet {e}: {path} gradient at rest is not zero"
             );
         }

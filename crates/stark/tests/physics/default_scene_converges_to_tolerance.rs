@@ -24,12 +24,7 @@ fn default_scene_converges_to_tolerance() {
             r.step,
             r.time_s
         );
-        assert!(
-            r.residual_n < 1e-6,
-            "step {}: residual {} N",
-            r.step,
-            r.residual_n
-        );
+        assert!(r.residual_n < 1e-6, "step {}: residual {} N", r.step, r.residual_n);
         assert_eq!(r.failed_attempts, 0);
         worst = worst.max(r.residual_n);
     }

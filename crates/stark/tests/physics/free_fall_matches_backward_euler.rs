@@ -22,13 +22,7 @@ fn free_fall_matches_backward_euler() {
         // Very soft rod moving rigidly: no strain, so only inertia acts.
         material.strain.youngs_modulus = 1e-3;
         let rod = sim
-            .add_line_segments(
-                "rod",
-                Vector3::zeros(),
-                Vector3::new(1.0, 0.0, 0.0),
-                4,
-                &material,
-            )
+            .add_line_segments("rod", Vector3::zeros(), Vector3::new(1.0, 0.0, 0.0), 4, &material)
             .unwrap();
         sim.set_velocity(rod.nodes, Vector3::new(1.0, 0.5, 2.0));
         let m = sim.deformables.inertia.node_masses(sim.nodes.len());

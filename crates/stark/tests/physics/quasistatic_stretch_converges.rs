@@ -33,13 +33,8 @@ fn quasistatic_stretch_converges() {
         tolerance_m: 1e-7,
     };
     let face = Vector3::new(1e-6, side * 1.01, side * 1.01);
-    sim.prescribe_in_box(
-        bar.nodes,
-        Vector3::new(-length / 2.0, 0.0, 0.0),
-        face,
-        k.clone(),
-    )
-    .unwrap();
+    sim.prescribe_in_box(bar.nodes, Vector3::new(-length / 2.0, 0.0, 0.0), face, k.clone())
+        .unwrap();
     let pull = sim
         .prescribe_in_box(bar.nodes, Vector3::new(length / 2.0, 0.0, 0.0), face, k)
         .unwrap();
@@ -48,18 +43,10 @@ fn quasistatic_stretch_converges() {
         let delta = stretch * length * step as f64 / 5.0;
         sim.deformables
             .prescribed
-            .set_transform(
-                pull,
-                Vector3::new(delta, 0.0, 0.0),
-                nalgebra::Rotation3::identity(),
-            )
+            .set_transform(pull, Vector3::new(delta, 0.0, 0.0), nalgebra::Rotation3::identity())
             .unwrap();
         let r = sim.step().unwrap();
-        assert!(
-            r.residual_n < 1e-6,
-            "load step {step}: residual {}",
-            r.residual_n
-        );
+        assert!(r.residual_n < 1e-6, "load step {step}: residual {}", r.residual_n);
     }
     // Reaction force: the spring force of the pulled nodes.
     let nodes = sim.deformables.prescribed.nodes_of(pull).unwrap().to_vec();

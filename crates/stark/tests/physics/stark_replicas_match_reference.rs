@@ -48,8 +48,7 @@ fn hanging_deformable_box_matches_reference() {
     let sim = run("hanging_deformable_box");
     assert_eq!(sim.deformables.tets.count_inverted(&sim.nodes.x), 0);
     // The reference figures are over the surface nodes only (602 of 2331).
-    let mesh =
-        stark::presets::meshes::tet_grid(Vector3::zeros(), Vector3::repeat(0.5), [10, 10, 10]);
+    let mesh = stark::presets::meshes::tet_grid(Vector3::zeros(), Vector3::repeat(0.5), [10, 10, 10]);
     let (_, surface_nodes) = stark::geometry::find_surface(&mesh.elements).unwrap();
     assert_eq!(surface_nodes.len(), 602);
     let x: Vec<Vector3<f64>> = surface_nodes.iter().map(|&i| sim.nodes.x[i]).collect();

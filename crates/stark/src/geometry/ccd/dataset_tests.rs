@@ -88,12 +88,7 @@ fn read_queries(path: &Path) -> Vec<Query> {
             (Vector3::new(c(0), c(1), c(2)), f[6].trim() == "1")
         })
         .collect();
-    assert_eq!(
-        rows.len() % 8,
-        0,
-        "{}: rows not a multiple of 8",
-        path.display()
-    );
+    assert_eq!(rows.len() % 8, 0, "{}: rows not a multiple of 8", path.display());
     rows.chunks(8)
         .map(|q| {
             let x0 = [q[0].0, q[1].0, q[2].0, q[3].0];
@@ -119,15 +114,9 @@ fn rational_conversion_is_correctly_rounded() {
     // 2^53 + 1 is a tie between 2^53 and 2^53 + 2: rounds to even (2^53).
     assert_eq!(rational_to_f64("9007199254740993", "1"), 9007199254740992.0);
     assert_eq!(rational_to_f64("9007199254740995", "1"), 9007199254740996.0);
-    assert_eq!(
-        rational_to_f64("1", "1267650600228229401496703205376"),
-        2f64.powi(-100)
-    );
+    assert_eq!(rational_to_f64("1", "1267650600228229401496703205376"), 2f64.powi(-100));
     for (n, d) in [(7u64, 10u64), (1, 10), (22, 7), (355, 113), (1, 1 << 40)] {
-        assert_eq!(
-            rational_to_f64(&n.to_string(), &d.to_string()),
-            n as f64 / d as f64
-        );
+        assert_eq!(rational_to_f64(&n.to_string(), &d.to_string()), n as f64 / d as f64);
     }
 }
 
@@ -176,10 +165,7 @@ fn ccd_queries_have_no_false_negatives() {
                     pos += truth as usize;
                     if truth && !hit {
                         fneg += 1;
-                        println!(
-                            "FALSE NEGATIVE in {} {kind}: {x0:?} -> {x1:?}",
-                            scene.display()
-                        );
+                        println!("FALSE NEGATIVE in {} {kind}: {x0:?} -> {x1:?}", scene.display());
                     }
                     if hit && !truth {
                         fpos += 1;
@@ -216,10 +202,7 @@ fn ccd_queries_have_no_false_negatives() {
 #[ignore]
 fn false_positives_vs_tolerance() {
     let mut files = Vec::new();
-    let mut scenes: Vec<PathBuf> = fs::read_dir(data_dir())
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .collect();
+    let mut scenes: Vec<PathBuf> = fs::read_dir(data_dir()).unwrap().map(|e| e.unwrap().path()).collect();
     scenes.sort();
     for scene in scenes.iter().filter(|p| p.is_dir()) {
         for (kind, stencil) in [

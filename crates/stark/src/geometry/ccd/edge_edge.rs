@@ -90,10 +90,7 @@ mod tests {
 
     fn assert_just_before(toi: Option<f64>, t_true: f64, slack: f64) {
         let toi = toi.expect("impact expected");
-        assert!(
-            toi < t_true && toi > t_true - slack,
-            "toi {toi}, true {t_true}"
-        );
+        assert!(toi < t_true && toi > t_true - slack, "toi {toi}, true {t_true}");
     }
 
     /// Edge a along x at height `z0 → z1`; edge b static along y at z = 0.
@@ -138,34 +135,19 @@ mod tests {
     #[test]
     fn parallel_and_coplanar() {
         // Parallel edges, one above the other, approaching: contact at t = 0.5.
-        let x0 = [
-            v(0.0, 0.0, 1.0),
-            v(1.0, 0.0, 1.0),
-            v(0.5, 0.0, 0.0),
-            v(2.0, 0.0, 0.0),
-        ];
+        let x0 = [v(0.0, 0.0, 1.0), v(1.0, 0.0, 1.0), v(0.5, 0.0, 0.0), v(2.0, 0.0, 0.0)];
         let mut x1 = x0;
         x1[0].z = -1.0;
         x1[1].z = -1.0;
         assert_just_before(ccd(x0, x1, 0.0), 0.5, 1e-5);
         // Parallel, sliding along each other at a constant gap: no impact.
-        let x0 = [
-            v(0.0, 0.0, 1e-3),
-            v(1.0, 0.0, 1e-3),
-            v(0.5, 0.0, 0.0),
-            v(2.0, 0.0, 0.0),
-        ];
+        let x0 = [v(0.0, 0.0, 1e-3), v(1.0, 0.0, 1e-3), v(0.5, 0.0, 0.0), v(2.0, 0.0, 0.0)];
         let mut x1 = x0;
         x1[0].x += 3.0;
         x1[1].x += 3.0;
         assert_eq!(ccd(x0, x1, 0.0), None);
         // Collinear, sliding into each other: end ea1 meets eb0 at t = 0.5.
-        let x0 = [
-            v(-2.0, 0.0, 0.0),
-            v(-1.0, 0.0, 0.0),
-            v(0.0, 0.0, 0.0),
-            v(1.0, 0.0, 0.0),
-        ];
+        let x0 = [v(-2.0, 0.0, 0.0), v(-1.0, 0.0, 0.0), v(0.0, 0.0, 0.0), v(1.0, 0.0, 0.0)];
         let mut x1 = x0;
         x1[0].x += 2.0;
         x1[1].x += 2.0;
@@ -186,12 +168,7 @@ mod tests {
     #[test]
     fn degenerate_edges_and_zero_motion() {
         // Zero-length edge a (a point) falling onto edge b.
-        let x0 = [
-            v(0.5, 0.0, 1.0),
-            v(0.5, 0.0, 1.0),
-            v(0.0, 0.0, 0.0),
-            v(1.0, 0.0, 0.0),
-        ];
+        let x0 = [v(0.5, 0.0, 1.0), v(0.5, 0.0, 1.0), v(0.0, 0.0, 0.0), v(1.0, 0.0, 0.0)];
         let mut x1 = x0;
         x1[0].z = -1.0;
         x1[1].z = -1.0;
@@ -277,8 +254,7 @@ mod tests {
             let dir = rp(&mut rng, 1.0);
             if k % 3 == 0 {
                 // Make edge b parallel to edge a at the contact time.
-                let ea =
-                    ea_t0[1] + ts * (ea_t1[1] - ea_t0[1]) - (ea_t0[0] + ts * (ea_t1[0] - ea_t0[0]));
+                let ea = ea_t0[1] + ts * (ea_t1[1] - ea_t0[1]) - (ea_t0[0] + ts * (ea_t1[0] - ea_t0[0]));
                 eb0_t0 = ea_t0[0] - 0.3 * ea;
             }
             // Point of edge a at the contact time; place eb's point β there at `ts`.
@@ -290,8 +266,7 @@ mod tests {
             let eb1_t0 = eb0_t0 + eb_dir;
             let eb1_t1 = eb0_t1 + eb_dir;
             let toi = edge_edge_ccd(
-                &ea_t0[0], &ea_t0[1], &eb0_t0, &eb1_t0, &ea_t1[0], &ea_t1[1], &eb0_t1, &eb1_t1,
-                0.0, 1.0,
+                &ea_t0[0], &ea_t0[1], &eb0_t0, &eb1_t0, &ea_t1[0], &ea_t1[1], &eb0_t1, &eb1_t1, 0.0, 1.0,
             );
             let toi = toi.expect("constructed contact missed");
             assert!(toi <= ts + 1e-9, "toi {toi} vs {ts}");

@@ -69,9 +69,7 @@ mod root_finder;
 mod dataset_tests;
 
 pub use edge_edge::{edge_edge_ccd, edge_edge_ccd_with_params, edge_edge_max_step};
-pub use point_triangle::{
-    point_triangle_ccd, point_triangle_ccd_with_params, point_triangle_max_step,
-};
+pub use point_triangle::{point_triangle_ccd, point_triangle_ccd_with_params, point_triangle_max_step};
 
 use nalgebra::Vector3;
 
@@ -152,21 +150,13 @@ struct Prepared {
 impl Prepared {
     /// Validates and rescales a query; `Err` carries the immediate answer for non-finite input or
     /// coincident vertices.
-    fn new(
-        stencil: Stencil,
-        x_t0: &[Vector3<f64>; 4],
-        x_t1: &[Vector3<f64>; 4],
-    ) -> Result<Self, CcdReport> {
+    fn new(stencil: Stencil, x_t0: &[Vector3<f64>; 4], x_t1: &[Vector3<f64>; 4]) -> Result<Self, CcdReport> {
         let contact = |initial_distance| CcdReport {
             toi: Some(0.0),
             iterations: 0,
             initial_distance,
         };
-        if !x_t0
-            .iter()
-            .chain(x_t1)
-            .all(|p| p.iter().all(|c| c.is_finite()))
-        {
+        if !x_t0.iter().chain(x_t1).all(|p| p.iter().all(|c| c.is_finite())) {
             return Err(contact(f64::NAN));
         }
         // Rescale by a power of two so the largest coordinate is in [1, 2): exact, and keeps
@@ -265,11 +255,7 @@ pub(crate) fn run_ccd(
 ) -> CcdReport {
     match Prepared::new(stencil, x_t0, x_t1) {
         Err(report) => report,
-        Ok(prepared) => prepared.run(
-            sanitize_min_distance(min_distance),
-            sanitize_tmax(tmax),
-            params,
-        ),
+        Ok(prepared) => prepared.run(sanitize_min_distance(min_distance), sanitize_tmax(tmax), params),
     }
 }
 

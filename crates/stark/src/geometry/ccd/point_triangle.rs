@@ -43,15 +43,7 @@ pub fn point_triangle_ccd_with_params(
     tmax: f64,
     params: &CcdParams,
 ) -> Option<f64> {
-    run_ccd(
-        Stencil::PointTriangle,
-        x_t0,
-        x_t1,
-        min_distance,
-        tmax,
-        params,
-    )
-    .toi
+    run_ccd(Stencil::PointTriangle, x_t0, x_t1, min_distance, tmax, params).toi
 }
 
 /// Largest safe line-search step `α ∈ [0, tmax]` for a point–triangle candidate moving from `x_t0`
@@ -68,14 +60,7 @@ pub fn point_triangle_max_step(
     tmax: f64,
     params: &CcdParams,
 ) -> f64 {
-    max_step(
-        Stencil::PointTriangle,
-        x_t0,
-        x_t1,
-        min_distance,
-        tmax,
-        params,
-    )
+    max_step(Stencil::PointTriangle, x_t0, x_t1, min_distance, tmax, params)
 }
 
 #[cfg(test)]
@@ -104,12 +89,7 @@ mod tests {
     }
 
     /// CCD of a point moving `p0 → p1` against a static triangle.
-    fn ccd_static(
-        p0: Vector3<f64>,
-        p1: Vector3<f64>,
-        t: &[Vector3<f64>; 3],
-        d: f64,
-    ) -> Option<f64> {
+    fn ccd_static(p0: Vector3<f64>, p1: Vector3<f64>, t: &[Vector3<f64>; 3], d: f64) -> Option<f64> {
         point_triangle_ccd(&p0, &t[0], &t[1], &t[2], &p1, &t[0], &t[1], &t[2], d, 1.0)
     }
 
@@ -121,10 +101,7 @@ mod tests {
     /// Asserts `toi` is within `[t_true − slack, t_true)`.
     fn assert_just_before(toi: Option<f64>, t_true: f64, slack: f64) {
         let toi = toi.expect("impact expected");
-        assert!(
-            toi < t_true && toi > t_true - slack,
-            "toi {toi}, true {t_true}"
-        );
+        assert!(toi < t_true && toi > t_true - slack, "toi {toi}, true {t_true}");
     }
 
     #[test]
@@ -154,15 +131,9 @@ mod tests {
     #[test]
     fn misses() {
         let t = tri();
-        assert_eq!(
-            ccd_static(v(2.0, 2.0, 1.0), v(2.0, 2.0, -1.0), &t, 0.0),
-            None
-        );
+        assert_eq!(ccd_static(v(2.0, 2.0, 1.0), v(2.0, 2.0, -1.0), &t, 0.0), None);
         // Stops short of the plane.
-        assert_eq!(
-            ccd_static(v(0.2, 0.2, 1.0), v(0.2, 0.2, 0.01), &t, 0.0),
-            None
-        );
+        assert_eq!(ccd_static(v(0.2, 0.2, 1.0), v(0.2, 0.2, 0.01), &t, 0.0), None);
         // tmax before the crossing.
         let r = point_triangle_ccd(
             &v(0.25, 0.25, 1.0),
@@ -182,75 +153,35 @@ mod tests {
     #[test]
     fn zero_motion() {
         let t = tri();
-        assert_eq!(
-            ccd_static(v(0.2, 0.2, 0.5), v(0.2, 0.2, 0.5), &t, 0.0),
-            None
-        );
-        assert_eq!(
-            ccd_static(v(0.2, 0.2, 0.5), v(0.2, 0.2, 0.5), &t, 0.4),
-            None
-        );
-        assert_eq!(
-            ccd_static(v(0.2, 0.2, 0.5), v(0.2, 0.2, 0.5), &t, 0.5),
-            Some(0.0)
-        );
-        assert_eq!(
-            ccd_static(v(0.2, 0.2, 0.0), v(0.2, 0.2, 0.0), &t, 0.0),
-            Some(0.0)
-        );
+        assert_eq!(ccd_static(v(0.2, 0.2, 0.5), v(0.2, 0.2, 0.5), &t, 0.0), None);
+        assert_eq!(ccd_static(v(0.2, 0.2, 0.5), v(0.2, 0.2, 0.5), &t, 0.4), None);
+        assert_eq!(ccd_static(v(0.2, 0.2, 0.5), v(0.2, 0.2, 0.5), &t, 0.5), Some(0.0));
+        assert_eq!(ccd_static(v(0.2, 0.2, 0.0), v(0.2, 0.2, 0.0), &t, 0.0), Some(0.0));
         // Tiny but positive gap at rest: no impact.
-        assert_eq!(
-            ccd_static(v(0.2, 0.2, 1e-9), v(0.2, 0.2, 1e-9), &t, 0.0),
-            None
-        );
+        assert_eq!(ccd_static(v(0.2, 0.2, 1e-9), v(0.2, 0.2, 1e-9), &t, 0.0), None);
     }
 
     #[test]
     fn grazing_and_in_plane_motion() {
         let t = tri();
         // Sliding parallel to the plane just above it: no impact.
-        assert_eq!(
-            ccd_static(v(-1.0, 0.25, 1e-4), v(2.0, 0.25, 1e-4), &t, 0.0),
-            None
-        );
+        assert_eq!(ccd_static(v(-1.0, 0.25, 1e-4), v(2.0, 0.25, 1e-4), &t, 0.0), None);
         // In the plane, entering through edge 2 (x = 0) at t = 0.5.
-        assert_just_before(
-            ccd_static(v(-1.0, 0.25, 0.0), v(1.0, 0.25, 0.0), &t, 0.0),
-            0.5,
-            1e-5,
-        );
+        assert_just_before(ccd_static(v(-1.0, 0.25, 0.0), v(1.0, 0.25, 0.0), &t, 0.0), 0.5, 1e-5);
         // Moving along the line of edge 0, reaching vertex t0 at t = 0.25.
-        assert_just_before(
-            ccd_static(v(-1.0, 0.0, 0.0), v(3.0, 0.0, 0.0), &t, 0.0),
-            0.25,
-            1e-5,
-        );
+        assert_just_before(ccd_static(v(-1.0, 0.0, 0.0), v(3.0, 0.0, 0.0), &t, 0.0), 0.25, 1e-5);
         // Moving along the edge line but starting beyond t1: no impact.
-        assert_eq!(
-            ccd_static(v(1.5, 0.0, 0.0), v(3.0, 0.0, 0.0), &t, 0.0),
-            None
-        );
+        assert_eq!(ccd_static(v(1.5, 0.0, 0.0), v(3.0, 0.0, 0.0), &t, 0.0), None);
         // Grazing the vertex t2 from above and along the diagonal.
-        assert_just_before(
-            ccd_static(v(-1.0, 2.0, 1.0), v(1.0, 0.0, -1.0), &t, 0.0),
-            0.5,
-            1e-5,
-        );
+        assert_just_before(ccd_static(v(-1.0, 2.0, 1.0), v(1.0, 0.0, -1.0), &t, 0.0), 0.5, 1e-5);
     }
 
     #[test]
     fn degenerate_triangles() {
         // Collinear triangle (a segment along x): point crossing its middle at t = 0.5.
         let seg = [v(0.0, 0.0, 0.0), v(2.0, 0.0, 0.0), v(1.0, 0.0, 0.0)];
-        assert_just_before(
-            ccd_static(v(1.5, -1.0, 0.0), v(1.5, 1.0, 0.0), &seg, 0.0),
-            0.5,
-            1e-5,
-        );
-        assert_eq!(
-            ccd_static(v(1.5, -1.0, 0.1), v(1.5, 1.0, 0.1), &seg, 0.0),
-            None
-        );
+        assert_just_before(ccd_static(v(1.5, -1.0, 0.0), v(1.5, 1.0, 0.0), &seg, 0.0), 0.5, 1e-5);
+        assert_eq!(ccd_static(v(1.5, -1.0, 0.1), v(1.5, 1.0, 0.1), &seg, 0.0), None);
         // Triangle collapsing to a point during the motion while the point passes through it.
         let p = v(0.5, 0.5, 0.5);
         let toi = point_triangle_ccd(
@@ -287,10 +218,7 @@ mod tests {
         let mut x1 = x0;
         x1[0].z = -1.0;
         let p = CcdParams::default();
-        assert_eq!(
-            point_triangle_ccd_with_params(&x0, &x1, 0.19, 1.0, &p),
-            None
-        );
+        assert_eq!(point_triangle_ccd_with_params(&x0, &x1, 0.19, 1.0, &p), None);
         assert!(point_triangle_ccd_with_params(&x0, &x1, 0.21, 1.0, &p).is_some());
     }
 
@@ -305,10 +233,7 @@ mod tests {
         );
         // Negative and NaN min_distance act as 0; tmax is clamped.
         let a = ccd_static(v(0.2, 0.2, 1.0), v(0.2, 0.2, -1.0), &t, -1.0);
-        assert_eq!(
-            a,
-            ccd_static(v(0.2, 0.2, 1.0), v(0.2, 0.2, -1.0), &t, f64::NAN)
-        );
+        assert_eq!(a, ccd_static(v(0.2, 0.2, 1.0), v(0.2, 0.2, -1.0), &t, f64::NAN));
         let r = point_triangle_ccd(
             &v(0.25, 0.25, 1.0),
             &t[0],
@@ -324,10 +249,7 @@ mod tests {
         assert_just_before(r, 0.5, 1e-5);
         // Everything at the origin.
         let z = v(0.0, 0.0, 0.0);
-        assert_eq!(
-            point_triangle_ccd(&z, &z, &z, &z, &z, &z, &z, &z, 0.0, 1.0),
-            Some(0.0)
-        );
+        assert_eq!(point_triangle_ccd(&z, &z, &z, &z, &z, &z, &z, &z, 0.0, 1.0), Some(0.0));
     }
 
     #[test]
@@ -350,13 +272,7 @@ mod tests {
                 tolerance: p.tolerance * s,
                 ..p
             };
-            let r = point_triangle_ccd_with_params(
-                &x0.map(|x| x * s),
-                &x1.map(|x| x * s),
-                0.0,
-                1.0,
-                &params,
-            );
+            let r = point_triangle_ccd_with_params(&x0.map(|x| x * s), &x1.map(|x| x * s), 0.0, 1.0, &params);
             assert_eq!(r, base, "scale 2^{e}");
         }
     }
@@ -368,25 +284,13 @@ mod tests {
     #[test]
     fn tangential_approach_with_min_distance_is_cheap() {
         let x0 = [
-            v(
-                -0.35465299739211753,
-                0.5008929139556098,
-                -0.5643357840284517,
-            ),
-            v(
-                -0.7232215510385456,
-                -0.5989269608716512,
-                -0.02779165907751846,
-            ),
+            v(-0.35465299739211753, 0.5008929139556098, -0.5643357840284517),
+            v(-0.7232215510385456, -0.5989269608716512, -0.02779165907751846),
             v(0.7693168346075443, -0.16307585603090446, -0.955402010484864),
             v(0.1922559118663889, 0.6030060462221178, 0.6568260549822349),
         ];
         let x1 = [
-            v(
-                0.09000174023437563,
-                -0.7425253517186735,
-                0.32535967420798023,
-            ),
+            v(0.09000174023437563, -0.7425253517186735, 0.32535967420798023),
             v(-0.7228087648307822, -0.9258891010137442, 0.188459924583406),
             v(0.2988230751845138, -0.5058463069125336, -0.9635149830612799),
             v(-0.29297471925814667, 0.7584566027541595, 1.017937895020154),
@@ -408,10 +312,7 @@ mod tests {
         let x1 = [v(0.25, 0.25, -1.0), t[0], t[1], t[2]];
         // Effective gap min(0.2·1, 1e-4) = 1e-4 is reached at t = 0.5 − 5e-5; 0.8 of that.
         let a = point_triangle_max_step(&x0, &x1, 0.0, 1.0, &p);
-        assert!(
-            a < 0.8 * (0.5 - 5e-5) && a > 0.8 * (0.5 - 5e-5) - 1e-5,
-            "{a}"
-        );
+        assert!(a < 0.8 * (0.5 - 5e-5) && a > 0.8 * (0.5 - 5e-5) - 1e-5, "{a}");
         assert!(dist_at(&x0, &x1, a) > 1e-4);
         // No collision: the full step (or tmax).
         let mut far = x1;
@@ -473,10 +374,7 @@ mod tests {
         }
         assert!(hits > 100, "{hits}");
         // Tangential approaches with δ > 0 used to cost ~1e6 boxes; keep them cheap.
-        println!(
-            "{hits} contacts, {} boxes per query on average",
-            total_iter / 400
-        );
+        println!("{hits} contacts, {} boxes per query on average", total_iter / 400);
         assert!(total_iter < 400 * 2_000, "{total_iter}");
     }
 
@@ -507,9 +405,7 @@ mod tests {
             let at = |i: usize| t0[i] + ts * (t1[i] - t0[i]);
             let q = at(0) + b1 * (at(1) - at(0)) + b2 * (at(2) - at(0));
             let p1 = p0 + (q - p0) / ts;
-            let toi = point_triangle_ccd(
-                &p0, &t0[0], &t0[1], &t0[2], &p1, &t1[0], &t1[1], &t1[2], 0.0, 1.0,
-            );
+            let toi = point_triangle_ccd(&p0, &t0[0], &t0[1], &t0[2], &p1, &t1[0], &t1[1], &t1[2], 0.0, 1.0);
             let toi = toi.expect("constructed contact missed");
             assert!(toi <= ts + 1e-9, "toi {toi} vs {ts}");
         }

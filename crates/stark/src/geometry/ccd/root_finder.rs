@@ -89,8 +89,7 @@ impl Problem {
     fn corners(&self, b: &Domain) -> [[f64; 3]; 8] {
         let mut f = [[0.0; 3]; 8];
         for (it, &t) in b.t.iter().enumerate() {
-            let x: [[f64; 3]; 4] =
-                std::array::from_fn(|i| std::array::from_fn(|k| self.x0[i][k] + t * self.dx[i][k]));
+            let x: [[f64; 3]; 4] = std::array::from_fn(|i| std::array::from_fn(|k| self.x0[i][k] + t * self.dx[i][k]));
             for k in 0..3 {
                 match self.stencil {
                     Stencil::PointTriangle => {
@@ -269,8 +268,7 @@ fn assess(f: &[[f64; 3]; 8], err: &[f64; 3], delta: f64, delta_sq_bound: f64) ->
 fn direction_threshold(f: &[[f64; 3]; 8], err: &[f64; 3], delta: f64, n: &[f64; 3]) -> f64 {
     let mut magnitude: f64 = 0.0;
     for c in f {
-        magnitude = magnitude
-            .max(n[0].abs() * c[0].abs() + n[1].abs() * c[1].abs() + n[2].abs() * c[2].abs());
+        magnitude = magnitude.max(n[0].abs() * c[0].abs() + n[1].abs() * c[1].abs() + n[2].abs() * c[2].abs());
     }
     delta * (1.0 + 16.0 * f64::EPSILON)
         + n[0].abs() * err[0]
@@ -299,13 +297,7 @@ fn excluded_along(f: &[[f64; 3]; 8], err: &[f64; 3], delta: f64, n: &[f64; 3]) -
 /// threshold bounds `s`, and 90% of it leaves a margin. This is only a prediction: the caller
 /// evaluates the lower part exactly before discarding it. It is what keeps tangential approaches
 /// with `δ > 0` cheap, where bisection would subdivide the whole penetration disk in `(u, v)`.
-fn directional_time_split(
-    b: &Domain,
-    f: &[[f64; 3]; 8],
-    err: &[f64; 3],
-    delta: f64,
-    n: &[f64; 3],
-) -> Option<f64> {
+fn directional_time_split(b: &Domain, f: &[[f64; 3]; 8], err: &[f64; 3], delta: f64, n: &[f64; 3]) -> Option<f64> {
     let theta = direction_threshold(f, err, delta, n);
     let mut frac = f64::INFINITY;
     for c in 0..4 {
@@ -443,8 +435,7 @@ pub(crate) fn solve(problem: &Problem, s: &Settings) -> Outcome {
         if !must_refine {
             let narrow = width <= s.tolerance;
             let near_corner = (0..4).any(|c| {
-                let inside =
-                    problem.stencil == Stencil::EdgeEdge || b.u[(c >> 1) & 1] + b.v[c & 1] <= 1.0;
+                let inside = problem.stencil == Stencil::EdgeEdge || b.u[(c >> 1) & 1] + b.v[c & 1] <= 1.0;
                 inside && dot(&f[c], &f[c]).sqrt() <= s.delta + s.tolerance
             });
             if narrow || near_corner {
@@ -490,8 +481,5 @@ pub(crate) fn solve(problem: &Problem, s: &Settings) -> Outcome {
             }
         }
     }
-    Outcome {
-        toi: None,
-        iterations,
-    }
+    Outcome { toi: None, iterations }
 }

@@ -16,8 +16,8 @@
 use nalgebra::Vector3;
 
 use super::point_edge::{
-    point_edge_closest_parameter_typed, point_edge_distance_sq_typed, point_edge_distance_type,
-    point_line_distance_sq, PointEdgeDistanceType,
+    point_edge_closest_parameter_typed, point_edge_distance_sq_typed, point_edge_distance_type, point_line_distance_sq,
+    PointEdgeDistanceType,
 };
 use super::point_point::point_point_distance_sq;
 
@@ -86,12 +86,7 @@ fn closest_on_boundary(
     use EdgeEdgeDistanceType as Ee;
     use PointEdgeDistanceType as Pe;
     // (point, edge start, edge end, types for [PointE0, PointE1, PointEdge]).
-    type Candidate<'a> = (
-        &'a Vector3<f64>,
-        &'a Vector3<f64>,
-        &'a Vector3<f64>,
-        [Ee; 3],
-    );
+    type Candidate<'a> = (&'a Vector3<f64>, &'a Vector3<f64>, &'a Vector3<f64>, [Ee; 3]);
     let candidates: [Candidate; 4] = [
         (eb0, ea0, ea1, [Ee::Ea0Eb0, Ee::Ea1Eb0, Ee::EaEb0]),
         (eb1, ea0, ea1, [Ee::Ea0Eb1, Ee::Ea1Eb1, Ee::EaEb1]),
@@ -175,12 +170,7 @@ pub fn edge_edge_distance_sq_typed(
 
 /// Squared distance between the closed edges `[ea0, ea1]` and `[eb0, eb1]` (classifies with
 /// [`edge_edge_distance_type`] first).
-pub fn edge_edge_distance_sq(
-    ea0: &Vector3<f64>,
-    ea1: &Vector3<f64>,
-    eb0: &Vector3<f64>,
-    eb1: &Vector3<f64>,
-) -> f64 {
+pub fn edge_edge_distance_sq(ea0: &Vector3<f64>, ea1: &Vector3<f64>, eb0: &Vector3<f64>, eb1: &Vector3<f64>) -> f64 {
     let ty = edge_edge_distance_type(ea0, ea1, eb0, eb1);
     edge_edge_distance_sq_typed(ea0, ea1, eb0, eb1, ty)
 }
@@ -217,22 +207,10 @@ pub fn edge_edge_closest_parameters_typed(
         Ee::Ea0Eb1 => (0.0, 1.0),
         Ee::Ea1Eb0 => (1.0, 0.0),
         Ee::Ea1Eb1 => (1.0, 1.0),
-        Ee::EaEb0 => (
-            point_edge_closest_parameter_typed(eb0, ea0, ea1, PointEdge),
-            0.0,
-        ),
-        Ee::EaEb1 => (
-            point_edge_closest_parameter_typed(eb1, ea0, ea1, PointEdge),
-            1.0,
-        ),
-        Ee::Ea0Eb => (
-            0.0,
-            point_edge_closest_parameter_typed(ea0, eb0, eb1, PointEdge),
-        ),
-        Ee::Ea1Eb => (
-            1.0,
-            point_edge_closest_parameter_typed(ea1, eb0, eb1, PointEdge),
-        ),
+        Ee::EaEb0 => (point_edge_closest_parameter_typed(eb0, ea0, ea1, PointEdge), 0.0),
+        Ee::EaEb1 => (point_edge_closest_parameter_typed(eb1, ea0, ea1, PointEdge), 1.0),
+        Ee::Ea0Eb => (0.0, point_edge_closest_parameter_typed(ea0, eb0, eb1, PointEdge)),
+        Ee::Ea1Eb => (1.0, point_edge_closest_parameter_typed(ea1, eb0, eb1, PointEdge)),
         Ee::EaEb => match line_line_parameters(ea0, ea1, eb0, eb1) {
             Some((_, s, t)) => (s, t),
             None => {
@@ -245,12 +223,7 @@ pub fn edge_edge_closest_parameters_typed(
 
 /// `x = |(ea1 − ea0) × (eb1 − eb0)|²`, the argument of the edge–edge mollifier (ipc-notes B.3).
 #[inline]
-pub fn edge_edge_cross_norm_sq(
-    ea0: &Vector3<f64>,
-    ea1: &Vector3<f64>,
-    eb0: &Vector3<f64>,
-    eb1: &Vector3<f64>,
-) -> f64 {
+pub fn edge_edge_cross_norm_sq(ea0: &Vector3<f64>, ea1: &Vector3<f64>, eb0: &Vector3<f64>, eb1: &Vector3<f64>) -> f64 {
     (ea1 - ea0).cross(&(eb1 - eb0)).norm_squared()
 }
 
@@ -362,10 +335,7 @@ mod tests {
         assert_ne!(ty, Ee::EaEb);
         assert_eq!(edge_edge_distance_sq(&a0, &a1, &b0, &b1), 1.0);
         // The mollified (forced `EaEb`) distance of parallel lines is their separation too.
-        assert_eq!(
-            edge_edge_distance_sq_typed(&a0, &a1, &b0, &b1, Ee::EaEb),
-            1.0
-        );
+        assert_eq!(edge_edge_distance_sq_typed(&a0, &a1, &b0, &b1, Ee::EaEb), 1.0);
         // Parallel, disjoint in x.
         let (b0, b1) = (v(3.0, 1.0, 0.0), v(4.0, 1.0, 0.0));
         check([a0, a1, b0, b1], Ee::Ea1Eb0, 2.0, (1.0, 0.0));
@@ -400,10 +370,7 @@ mod tests {
             // Nearly parallel by angle s.
             let (b0, b1) = (v(0.0, 1.0, 0.0), v(1.0, 1.0 + s, 0.0));
             let d = edge_edge_distance_sq(&a0, &a1, &b0, &b1);
-            assert!(
-                (d - 1.0f64.min((1.0 + s) * (1.0 + s))).abs() < 1e-12,
-                "s = {s}: {d}"
-            );
+            assert!((d - 1.0f64.min((1.0 + s) * (1.0 + s))).abs() < 1e-12, "s = {s}: {d}");
             // Both edges of length s, one unit apart.
             let (c0, c1) = (v(0.0, 0.0, 0.0), v(s, 0.0, 0.0));
             let (b0, b1) = (v(0.0, 0.0, 1.0), v(0.0, s, 1.0));
@@ -483,18 +450,13 @@ mod tests {
         assert!(edge_edge_mollifier_derivative(eps * (1.0 - 1e-12), eps).abs() < 1e-6);
         for &x in &[0.1 * eps, 0.5 * eps, 0.9 * eps, 1.5 * eps] {
             let h = 1e-6 * eps;
-            let fd =
-                (edge_edge_mollifier(x + h, eps) - edge_edge_mollifier(x - h, eps)) / (2.0 * h);
+            let fd = (edge_edge_mollifier(x + h, eps) - edge_edge_mollifier(x - h, eps)) / (2.0 * h);
             let an = edge_edge_mollifier_derivative(x, eps);
             assert!((fd - an).abs() <= 1e-6 * (1.0 + an.abs()), "{fd} vs {an}");
-            let fd2 = (edge_edge_mollifier_derivative(x + h, eps)
-                - edge_edge_mollifier_derivative(x - h, eps))
-                / (2.0 * h);
+            let fd2 =
+                (edge_edge_mollifier_derivative(x + h, eps) - edge_edge_mollifier_derivative(x - h, eps)) / (2.0 * h);
             let an2 = edge_edge_mollifier_second_derivative(x, eps);
-            assert!(
-                (fd2 - an2).abs() <= 1e-6 * (1.0 + an2.abs()),
-                "{fd2} vs {an2}"
-            );
+            assert!((fd2 - an2).abs() <= 1e-6 * (1.0 + an2.abs()), "{fd2} vs {an2}");
         }
     }
 }

@@ -30,21 +30,20 @@ mod point_point;
 mod point_triangle;
 
 pub use edge_edge::{
-    edge_edge_closest_parameters, edge_edge_closest_parameters_typed, edge_edge_cross_norm_sq,
-    edge_edge_distance_sq, edge_edge_distance_sq_typed, edge_edge_distance_type,
-    edge_edge_mollifier, edge_edge_mollifier_derivative, edge_edge_mollifier_second_derivative,
-    edge_edge_mollifier_threshold, EdgeEdgeDistanceType, EDGE_EDGE_PARALLEL_THRESHOLD,
+    edge_edge_closest_parameters, edge_edge_closest_parameters_typed, edge_edge_cross_norm_sq, edge_edge_distance_sq,
+    edge_edge_distance_sq_typed, edge_edge_distance_type, edge_edge_mollifier, edge_edge_mollifier_derivative,
+    edge_edge_mollifier_second_derivative, edge_edge_mollifier_threshold, EdgeEdgeDistanceType,
+    EDGE_EDGE_PARALLEL_THRESHOLD,
 };
 pub use point_edge::{
     point_edge_closest_parameter, point_edge_closest_parameter_typed, point_edge_distance_sq,
-    point_edge_distance_sq_typed, point_edge_distance_type, point_line_distance_sq,
-    PointEdgeDistanceType,
+    point_edge_distance_sq_typed, point_edge_distance_type, point_line_distance_sq, PointEdgeDistanceType,
 };
 pub use point_point::point_point_distance_sq;
 pub use point_triangle::{
-    point_plane_distance_sq, point_triangle_closest_barycentric,
-    point_triangle_closest_barycentric_typed, point_triangle_distance_sq,
-    point_triangle_distance_sq_typed, point_triangle_distance_type, PointTriangleDistanceType,
+    point_plane_distance_sq, point_triangle_closest_barycentric, point_triangle_closest_barycentric_typed,
+    point_triangle_distance_sq, point_triangle_distance_sq_typed, point_triangle_distance_type,
+    PointTriangleDistanceType,
 };
 
 #[cfg(test)]

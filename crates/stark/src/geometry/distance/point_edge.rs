@@ -26,20 +26,12 @@ pub enum PointEdgeDistanceType {
 /// `r ≥ 1` → [`PointE1`](PointEdgeDistanceType::PointE1), otherwise
 /// [`PointEdge`](PointEdgeDistanceType::PointEdge). Ties go to the vertex (same distance, exact
 /// formula). A zero-length edge gives `PointE0`. NaN input gives some type without panicking.
-pub fn point_edge_distance_type(
-    p: &Vector3<f64>,
-    e0: &Vector3<f64>,
-    e1: &Vector3<f64>,
-) -> PointEdgeDistanceType {
+pub fn point_edge_distance_type(p: &Vector3<f64>, e0: &Vector3<f64>, e1: &Vector3<f64>) -> PointEdgeDistanceType {
     let e = e1 - e0;
     let len_sq = e.norm_squared();
     // Zero, underflowed (edges shorter than ~1e-154), infinite or NaN lengths: use e0.
     let usable = len_sq > 0.0 && len_sq.is_finite();
-    let r = if usable {
-        e.dot(&(p - e0)) / len_sq
-    } else {
-        0.0
-    };
+    let r = if usable { e.dot(&(p - e0)) / len_sq } else { 0.0 };
     if r <= 0.0 {
         PointEdgeDistanceType::PointE0
     } else if r >= 1.0 {
@@ -139,26 +131,17 @@ mod tests {
         let e1 = v(2.0, 0.0, 0.0);
         // Before e0.
         let p = v(-1.0, 1.0, 0.0);
-        assert_eq!(
-            point_edge_distance_type(&p, &e0, &e1),
-            PointEdgeDistanceType::PointE0
-        );
+        assert_eq!(point_edge_distance_type(&p, &e0, &e1), PointEdgeDistanceType::PointE0);
         assert_eq!(point_edge_distance_sq(&p, &e0, &e1), 2.0);
         assert_eq!(point_edge_closest_parameter(&p, &e0, &e1), 0.0);
         // Past e1.
         let p = v(3.0, 0.0, 2.0);
-        assert_eq!(
-            point_edge_distance_type(&p, &e0, &e1),
-            PointEdgeDistanceType::PointE1
-        );
+        assert_eq!(point_edge_distance_type(&p, &e0, &e1), PointEdgeDistanceType::PointE1);
         assert_eq!(point_edge_distance_sq(&p, &e0, &e1), 5.0);
         assert_eq!(point_edge_closest_parameter(&p, &e0, &e1), 1.0);
         // Interior.
         let p = v(0.5, 3.0, 4.0);
-        assert_eq!(
-            point_edge_distance_type(&p, &e0, &e1),
-            PointEdgeDistanceType::PointEdge
-        );
+        assert_eq!(point_edge_distance_type(&p, &e0, &e1), PointEdgeDistanceType::PointEdge);
         assert!((point_edge_distance_sq(&p, &e0, &e1) - 25.0).abs() < 1e-14);
         assert!((point_edge_closest_parameter(&p, &e0, &e1) - 0.25).abs() < 1e-15);
         // Unclamped typed parameter extrapolates along the line.
@@ -178,14 +161,8 @@ mod tests {
         assert_eq!(point_edge_distance_sq(&v(2.0, 1.0, 1.0), &e0, &e1), 0.0);
         assert_eq!(point_edge_distance_sq(&e0, &e0, &e1), 0.0);
         assert_eq!(point_edge_distance_sq(&e1, &e0, &e1), 0.0);
-        assert_eq!(
-            point_edge_distance_type(&e0, &e0, &e1),
-            PointEdgeDistanceType::PointE0
-        );
-        assert_eq!(
-            point_edge_distance_type(&e1, &e0, &e1),
-            PointEdgeDistanceType::PointE1
-        );
+        assert_eq!(point_edge_distance_type(&e0, &e0, &e1), PointEdgeDistanceType::PointE0);
+        assert_eq!(point_edge_distance_type(&e1, &e0, &e1), PointEdgeDistanceType::PointE1);
     }
 
     #[test]
@@ -212,10 +189,7 @@ mod tests {
         // Zero-length edge: falls back to the point.
         let e = v(1.0, 2.0, 3.0);
         let p = v(1.0, 2.0, 5.0);
-        assert_eq!(
-            point_edge_distance_type(&p, &e, &e),
-            PointEdgeDistanceType::PointE0
-        );
+        assert_eq!(point_edge_distance_type(&p, &e, &e), PointEdgeDistanceType::PointE0);
         assert_eq!(point_edge_distance_sq(&p, &e, &e), 4.0);
         assert_eq!(
             point_edge_distance_sq_typed(&p, &e, &e, PointEdgeDistanceType::PointEdge),

@@ -11,8 +11,8 @@
 use nalgebra::Vector3;
 
 use super::point_edge::{
-    point_edge_closest_parameter_typed, point_edge_distance_sq_typed, point_edge_distance_type,
-    point_line_distance_sq, PointEdgeDistanceType,
+    point_edge_closest_parameter_typed, point_edge_distance_sq_typed, point_edge_distance_type, point_line_distance_sq,
+    PointEdgeDistanceType,
 };
 use super::point_point::point_point_distance_sq;
 
@@ -46,19 +46,12 @@ pub enum PointTriangleDistanceType {
 
 /// Whether `t0, t1, t2` span a plane well enough to use its normal (see
 /// [`DEGENERATE_TRIANGLE_REL`]); returns the unnormalised normal when they do.
-fn triangle_normal(
-    t0: &Vector3<f64>,
-    t1: &Vector3<f64>,
-    t2: &Vector3<f64>,
-) -> Option<Vector3<f64>> {
+fn triangle_normal(t0: &Vector3<f64>, t1: &Vector3<f64>, t2: &Vector3<f64>) -> Option<Vector3<f64>> {
     let e0 = t1 - t0;
     let e1 = t2 - t1;
     let e2 = t0 - t2;
     let n = e0.cross(&(t2 - t0));
-    let emax_sq = e0
-        .norm_squared()
-        .max(e1.norm_squared())
-        .max(e2.norm_squared());
+    let emax_sq = e0.norm_squared().max(e1.norm_squared()).max(e2.norm_squared());
     let n_sq = n.norm_squared();
     // `>` is false for NaN, zero and an underflowed normal: all take the boundary path.
     if n_sq > DEGENERATE_TRIANGLE_REL * emax_sq * emax_sq && n_sq.is_finite() {
@@ -70,10 +63,7 @@ fn triangle_normal(
 
 /// The closest boundary feature: the nearest of the three point–edge distances, mapped to the
 /// triangle's types. Ties go to the earlier edge.
-fn closest_on_boundary(
-    p: &Vector3<f64>,
-    t: [&Vector3<f64>; 3],
-) -> (PointTriangleDistanceType, f64) {
+fn closest_on_boundary(p: &Vector3<f64>, t: [&Vector3<f64>; 3]) -> (PointTriangleDistanceType, f64) {
     use PointEdgeDistanceType as Pe;
     use PointTriangleDistanceType as Pt;
     const MAP: [[PointTriangleDistanceType; 3]; 3] = [
@@ -130,12 +120,7 @@ pub fn point_triangle_distance_type(
 ///
 /// For a degenerate triangle (no well-defined plane) this returns the distance to the triangle's
 /// boundary instead, so finite input always gives a finite result.
-pub fn point_plane_distance_sq(
-    p: &Vector3<f64>,
-    t0: &Vector3<f64>,
-    t1: &Vector3<f64>,
-    t2: &Vector3<f64>,
-) -> f64 {
+pub fn point_plane_distance_sq(p: &Vector3<f64>, t0: &Vector3<f64>, t1: &Vector3<f64>, t2: &Vector3<f64>) -> f64 {
     match triangle_normal(t0, t1, t2) {
         Some(n) => {
             let h = (p - t0).dot(&n);
@@ -170,12 +155,7 @@ pub fn point_triangle_distance_sq_typed(
 
 /// Squared distance from `p` to the closed triangle `(t0, t1, t2)` (classifies with
 /// [`point_triangle_distance_type`] first).
-pub fn point_triangle_distance_sq(
-    p: &Vector3<f64>,
-    t0: &Vector3<f64>,
-    t1: &Vector3<f64>,
-    t2: &Vector3<f64>,
-) -> f64 {
+pub fn point_triangle_distance_sq(p: &Vector3<f64>, t0: &Vector3<f64>, t1: &Vector3<f64>, t2: &Vector3<f64>) -> f64 {
     let ty = point_triangle_distance_type(p, t0, t1, t2);
     point_triangle_distance_sq_typed(p, t0, t1, t2, ty)
 }
@@ -212,10 +192,7 @@ pub fn point_triangle_closest_barycentric_typed(
         Pt::PointT0 => (0.0, 0.0),
         Pt::PointT1 => (1.0, 0.0),
         Pt::PointT2 => (0.0, 1.0),
-        Pt::PointEdge0 => (
-            point_edge_closest_parameter_typed(p, t0, t1, PointEdge),
-            0.0,
-        ),
+        Pt::PointEdge0 => (point_edge_closest_parameter_typed(p, t0, t1, PointEdge), 0.0),
         Pt::PointEdge1 => {
             let a = point_edge_closest_parameter_typed(p, t1, t2, PointEdge);
             (1.0 - a, a)
@@ -258,21 +235,11 @@ mod tests {
     }
 
     fn check(p: Vector3<f64>, t: &[Vector3<f64>; 3], ty: Pt, d: f64, bary: (f64, f64)) {
-        assert_eq!(
-            point_triangle_distance_type(&p, &t[0], &t[1], &t[2]),
-            ty,
-            "p = {p:?}"
-        );
+        assert_eq!(point_triangle_distance_type(&p, &t[0], &t[1], &t[2]), ty, "p = {p:?}");
         let got = point_triangle_distance_sq(&p, &t[0], &t[1], &t[2]);
-        assert!(
-            (got - d).abs() <= 1e-14 * (1.0 + d),
-            "p = {p:?}: {got} vs {d}"
-        );
+        assert!((got - d).abs() <= 1e-14 * (1.0 + d), "p = {p:?}: {got} vs {d}");
         let (b1, b2) = point_triangle_closest_barycentric(&p, &t[0], &t[1], &t[2]);
-        assert!(
-            (b1 - bary.0).abs() < 1e-14 && (b2 - bary.1).abs() < 1e-14,
-            "{b1} {b2}"
-        );
+        assert!((b1 - bary.0).abs() < 1e-14 && (b2 - bary.1).abs() < 1e-14, "{b1} {b2}");
     }
 
     #[test]
@@ -313,11 +280,7 @@ mod tests {
         let t = tri();
         // On the interior, on an edge, at a vertex: distance exactly 0.
         for p in [v(0.5, 0.5, 0.0), v(1.0, 0.0, 0.0), v(1.0, 1.0, 0.0), t[2]] {
-            assert_eq!(
-                point_triangle_distance_sq(&p, &t[0], &t[1], &t[2]),
-                0.0,
-                "{p:?}"
-            );
+            assert_eq!(point_triangle_distance_sq(&p, &t[0], &t[1], &t[2]), 0.0, "{p:?}");
         }
         // In-plane but outside.
         check(v(1.0, -0.5, 0.0), &t, Pt::PointEdge0, 0.25, (0.5, 0.0));
@@ -356,17 +319,11 @@ mod tests {
         let p = v(1.0, 1.0, 3.0);
         assert_eq!(point_triangle_distance_type(&p, &q, &q, &q), Pt::PointT0);
         assert_eq!(point_triangle_distance_sq(&p, &q, &q, &q), 4.0);
-        assert_eq!(
-            point_triangle_distance_sq_typed(&p, &q, &q, &q, Pt::PointTriangle),
-            4.0
-        );
+        assert_eq!(point_triangle_distance_sq_typed(&p, &q, &q, &q, Pt::PointTriangle), 4.0);
         let (a, b, c) = (v(0.0, 0.0, 0.0), v(1.0, 0.0, 0.0), v(3.0, 0.0, 0.0));
         let p = v(2.0, 1.0, 0.0);
         assert_eq!(point_triangle_distance_sq(&p, &a, &b, &c), 1.0);
-        assert_ne!(
-            point_triangle_distance_type(&p, &a, &b, &c),
-            Pt::PointTriangle
-        );
+        assert_ne!(point_triangle_distance_type(&p, &a, &b, &c), Pt::PointTriangle);
     }
 
     #[test]
@@ -386,17 +343,10 @@ mod tests {
         let mut rng = StdRng::seed_from_u64(1);
         for _ in 0..1000 {
             let p = 2.0 * random_point(&mut rng);
-            let t = [
-                random_point(&mut rng),
-                random_point(&mut rng),
-                random_point(&mut rng),
-            ];
+            let t = [random_point(&mut rng), random_point(&mut rng), random_point(&mut rng)];
             let ty = point_triangle_distance_type(&p, &t[0], &t[1], &t[2]);
             let d = point_triangle_distance_sq(&p, &t[0], &t[1], &t[2]);
-            assert_eq!(
-                d,
-                point_triangle_distance_sq_typed(&p, &t[0], &t[1], &t[2], ty)
-            );
+            assert_eq!(d, point_triangle_distance_sq_typed(&p, &t[0], &t[1], &t[2], ty));
             let (b1, b2) = point_triangle_closest_barycentric(&p, &t[0], &t[1], &t[2]);
             assert!(b1 >= -1e-12 && b2 >= -1e-12 && b1 + b2 <= 1.0 + 1e-12);
             let q = t[0] + b1 * (t[1] - t[0]) + b2 * (t[2] - t[0]);
@@ -410,11 +360,7 @@ mod tests {
         const N: usize = 300;
         for _ in 0..100 {
             let p = 1.5 * random_point(&mut rng);
-            let t = [
-                random_point(&mut rng),
-                random_point(&mut rng),
-                random_point(&mut rng),
-            ];
+            let t = [random_point(&mut rng), random_point(&mut rng), random_point(&mut rng)];
             // Sometimes put the point near the plane or make the triangle a sliver.
             let p = if rng.random_bool(0.3) {
                 let (b1, b2): (f64, f64) = (rng.random(), rng.random());

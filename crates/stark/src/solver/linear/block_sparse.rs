@@ -70,24 +70,22 @@ impl BlockSparseMatrix {
 
     /// `y = A x` (scalar vectors of length `3 n_blocks`), parallel over block rows.
     pub fn mul_vec(&self, x: &[f64], y: &mut [f64]) {
-        y.par_chunks_mut(3 * ROWS_PER_TASK)
-            .enumerate()
-            .for_each(|(chunk, ys)| {
-                let first = chunk * ROWS_PER_TASK;
-                for (k, yr) in ys.chunks_exact_mut(3).enumerate() {
-                    let r = first + k;
-                    let mut acc = [0.0; 3];
-                    for idx in self.row_start[r]..self.row_start[r + 1] {
-                        let c = self.cols[idx] as usize;
-                        let b = &self.values[idx];
-                        let xc = &x[3 * c..3 * c + 3];
-                        acc[0] += b[0] * xc[0] + b[1] * xc[1] + b[2] * xc[2];
-                        acc[1] += b[3] * xc[0] + b[4] * xc[1] + b[5] * xc[2];
-                        acc[2] += b[6] * xc[0] + b[7] * xc[1] + b[8] * xc[2];
-                    }
-                    yr.copy_from_slice(&acc);
+        y.par_chunks_mut(3 * ROWS_PER_TASK).enumerate().for_each(|(chunk, ys)| {
+            let first = chunk * ROWS_PER_TASK;
+            for (k, yr) in ys.chunks_exact_mut(3).enumerate() {
+                let r = first + k;
+                let mut acc = [0.0; 3];
+                for idx in self.row_start[r]..self.row_start[r + 1] {
+                    let c = self.cols[idx] as usize;
+                    let b = &self.values[idx];
+                    let xc = &x[3 * c..3 * c + 3];
+                    acc[0] += b[0] * xc[0] + b[1] * xc[1] + b[2] * xc[2];
+                    acc[1] += b[3] * xc[0] + b[4] * xc[1] + b[5] * xc[2];
+                    acc[2] += b[6] * xc[0] + b[7] * xc[1] + b[8] * xc[2];
                 }
-            });
+                yr.copy_from_slice(&acc);
+            }
+        });
     }
 
     /// Dense copy (tests and debugging only).

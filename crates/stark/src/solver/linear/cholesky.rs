@@ -93,11 +93,8 @@ impl CholeskySolver {
         }
         let an = self.analysis.as_ref().expect("analysis present");
         self.values.clear();
-        self.values.extend(
-            an.source
-                .iter()
-                .map(|&(blk, e)| a.values[blk as usize][e as usize]),
-        );
+        self.values
+            .extend(an.source.iter().map(|&(blk, e)| a.values[blk as usize][e as usize]));
         let mat = SparseColMatRef::new(an.symbolic_matrix.as_ref(), &self.values);
         let llt = Llt::try_new_with_symbolic(an.symbolic_llt.clone(), mat, Side::Lower)
             .map_err(|e| CholeskyError::NotPositiveDefinite(format!("{e:?}")))?;

@@ -55,13 +55,7 @@ fn apply_preconditioner(inv_diag: &[[f64; 9]], r: &[f64], z: &mut [f64]) {
 }
 
 /// Solve `A x = b` to `‖b − A x‖₂ ≤ tolerance`, starting from `x = 0`.
-pub fn solve(
-    a: &BlockSparseMatrix,
-    b: &[f64],
-    x: &mut [f64],
-    tolerance: f64,
-    max_iterations: usize,
-) -> CgInfo {
+pub fn solve(a: &BlockSparseMatrix, b: &[f64], x: &mut [f64], tolerance: f64, max_iterations: usize) -> CgInfo {
     let n = b.len();
     let inv_diag = block_jacobi(a);
     x.iter_mut().for_each(|v| *v = 0.0);
@@ -87,12 +81,8 @@ pub fn solve(
             break;
         }
         let alpha = rz / pap;
-        x.par_iter_mut()
-            .zip(p.par_iter())
-            .for_each(|(x, p)| *x += alpha * p);
-        r.par_iter_mut()
-            .zip(ap.par_iter())
-            .for_each(|(r, ap)| *r -= alpha * ap);
+        x.par_iter_mut().zip(p.par_iter()).for_each(|(x, p)| *x += alpha * p);
+        r.par_iter_mut().zip(ap.par_iter()).for_each(|(r, ap)| *r -= alpha * ap);
         info.iterations += 1;
         info.residual_norm = dot(&r, &r).sqrt();
         if info.residual_norm <= tolerance {
@@ -103,9 +93,7 @@ pub fn solve(
         let rz_new = dot(&r, &z);
         let beta = rz_new / rz;
         rz = rz_new;
-        p.par_iter_mut()
-            .zip(z.par_iter())
-            .for_each(|(p, z)| *p = z + beta * *p);
+        p.par_iter_mut().zip(z.par_iter()).for_each(|(p, z)| *p = z + beta * *p);
     }
     info
 }
@@ -157,11 +145,7 @@ mod tests {
             assert!(info.converged, "{info:?}");
             let mut ax = vec![0.0; 3 * n];
             a.mul_vec(&x, &mut ax);
-            let err = ax
-                .iter()
-                .zip(&b)
-                .map(|(p, q)| (p - q).abs())
-                .fold(0.0, f64::max);
+            let err = ax.iter().zip(&b).map(|(p, q)| (p - q).abs()).fold(0.0, f64::max);
             assert!(err < 1e-10 * n as f64, "n = {n}: {err}");
         }
     }

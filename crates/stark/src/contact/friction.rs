@@ -1,0 +1,188 @@
+//! Lagged, smoothed Coulomb friction (IPC, Li et al. 2020, §5; the original Stark's lagging).
+//!
+//! For each contact pair at the start of the step, with its closest points `Σᵢ cᵢ xᵢ⁰ = d n̂`
+//! (weights `cᵢ` from the closest-point parameters), the normal force `λ = κ |∂(m b)/∂d|`, an
+//! orthonormal tangent basis `T` (3×2, `Tᵀ n̂ = 0`) and the weights are frozen. The tangential
+//! relative displacement over the step is `u = Tᵀ Σᵢ cᵢ xᵢ − u₀` (`u₀ = Tᵀ Σᵢ cᵢ xᵢ⁰`), and the
+//! friction energy is `D = μ λ f₀(‖u‖)` with IPC's C¹ smoothing
+//! `f₀(y) = −y³/(3ε²) + y²/ε + ε/3` for `y < ε` and `f₀(y) = y` beyond, `ε = ε_v dt`
+//! (`ε_v` = the stick–slide velocity threshold). Sliding, the force `−∂D/∂x` has magnitude `μλ`
+//! opposite to the slip; sticking it is a spring of stiffness `2μλ/ε`.
+//!
+//! `D` depends on `x` only through the 2-vector `u`, whose Hessian
+//! `μλ [(f₁/y) I + ((f₁′y − f₁)/y³) u uᵀ]` is already positive semi-definite for this `f₀`
+//! (eigenvalues `f₁/y ≥ 0` and `f₁′ ≥ 0`), so no projection is needed.
+
+use crate::energy::{HyperDual, Scalar, Vec3};
+use nalgebra::Vector3;
+
+/// Regularisation of `‖u‖` at zero slip, relative to `ε` (keeps derivatives finite).
+const SLIP_REGULARISER: f64 = 1e-9;
+
+/// One lagged friction element.
+#[derive(Clone, Copy, Debug)]
+pub struct FrictionElement {
+    /// Global node indices; the first `len` are used.
+    pub nodes: [u32; 4],
+    /// Number of nodes.
+    pub len: usize,
+    /// Weights of the nodes in the relative displacement (positive on one side, negative on the
+    /// other).
+    pub weights: [f64; 4],
+    /// Orthonormal tangent basis (two unit vectors orthogonal to the normal).
+    pub basis: [Vector3<f64>; 2],
+    /// `μ λ`, N.
+    pub mu_lambda: f64,
+    /// Stick–slide threshold `ε = ε_v dt`, m.
+    pub eps_m: f64,
+    /// `Tᵀ Σᵢ cᵢ xᵢ⁰`, m.
+    pub u0: [f64; 2],
+}
+
+impl FrictionElement {
+    /// Build from the start-of-step positions: `normal` is the contact normal, the basis is any
+    /// orthonormal pair orthogonal to it.
+    pub fn new(
+        nodes: [u32; 4],
+        len: usize,
+        weights: [f64; 4],
+        normal: Vector3<f64>,
+        x0: &[Vector3<f64>; 4],
+        mu_lambda: f64,
+        eps_m: f64,
+    ) -> Self {
+        let n = normal.try_normalize(1e-300).unwrap_or_else(Vector3::z);
+        let helper = if n.x.abs() < 0.9 { Vector3::x() } else { Vector3::y() };
+        let t0 = n.cross(&helper).normalize();
+        let t1 = n.cross(&t0);
+        let rel: Vector3<f64> = (0..len).map(|i| x0[i] * weights[i]).sum();
+        FrictionElement {
+            nodes,
+            len,
+            weights,
+            basis: [t0, t1],
+            mu_lambda,
+            eps_m,
+            u0: [t0.dot(&rel), t1.dot(&rel)],
+        }
+    }
+
+    fn slip<S: Scalar>(&self, x: &[Vec3<S>; 4]) -> [S; 2] {
+        let mut u = [S::constant(-self.u0[0]), S::constant(-self.u0[1])];
+        for i in 0..self.len {
+            for (k, uk) in u.iter_mut().enumerate() {
+                *uk += x[i].dot_f64(&self.basis[k]) * self.weights[i];
+            }
+        }
+        u
+    }
+
+    /// Energy, written generically (the oracle).
+    pub fn energy<S: Scalar>(&self, x: &[Vec3<S>; 4]) -> S {
+        let [u0, u1] = self.slip(x);
+        let eps = self.eps_m;
+        let y = (u0.sq() + u1.sq() + (SLIP_REGULARISER * eps).powi(2)).sqrt();
+        let f0 = S::select_gt(
+            y,
+            S::constant(eps),
+            || y,
+            || -y.powi(3) * (1.0 / (3.0 * eps * eps)) + y.sq() * (1.0 / eps) + eps / 3.0,
+        );
+        f0 * self.mu_lambda
+    }
+
+    /// Value, gradient and Hessian (closed form, PSD) into `out`; unused nodes get zeros.
+    pub fn derivatives(&self, x: &[Vector3<f64>; 4], out: &mut HyperDual<4>) {
+        let mut u = [-self.u0[0], -self.u0[1]];
+        for i in 0..self.len {
+            for k in 0..2 {
+                u[k] += self.basis[k].dot(&x[i]) * self.weights[i];
+            }
+        }
+        let eps = self.eps_m;
+        let y = (u[0] * u[0] + u[1] * u[1] + (SLIP_REGULARISER * eps).powi(2)).sqrt();
+        let ml = self.mu_lambda;
+        // f₀, f₁/y and (f₁′y − f₁)/y³.
+        let (f0, f1_over_y, q) = if y < eps {
+            (
+                -y * y * y / (3.0 * eps * eps) + y * y / eps + eps / 3.0,
+                -y / (eps * eps) + 2.0 / eps,
+                -1.0 / (y * eps * eps),
+            )
+        } else {
+            (y, 1.0 / y, -1.0 / (y * y * y))
+        };
+        let gu = [ml * f1_over_y * u[0], ml * f1_over_y * u[1]];
+        let hu = [
+            [ml * (f1_over_y + q * u[0] * u[0]), ml * q * u[0] * u[1]],
+            [ml * q * u[1] * u[0], ml * (f1_over_y + q * u[1] * u[1])],
+        ];
+        out.value = ml * f0;
+        // ∂u_k/∂x_{i,d} = c_i T_k[d].
+        let mut a = [[[0.0f64; 3]; 4]; 2];
+        for k in 0..2 {
+            for i in 0..self.len {
+                for d in 0..3 {
+                    a[k][i][d] = self.weights[i] * self.basis[k][d];
+                }
+            }
+        }
+        for i in 0..4 {
+            for d in 0..3 {
+                out.grad[i][d] = a[0][i][d] * gu[0] + a[1][i][d] * gu[1];
+                for j in 0..4 {
+                    for e in 0..3 {
+                        let mut h = 0.0;
+                        for k in 0..2 {
+                            for l in 0..2 {
+                                h += a[k][i][d] * hu[k][l] * a[l][j][e];
+                            }
+                        }
+                        out.hess[i][d][j][e] = h;
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::energy::potential::symmetrize;
+
+    #[test]
+    fn derivatives_match_oracle_sticking_and_sliding() {
+        let x0 = [
+            Vector3::new(0.0, 0.0, 0.01),
+            Vector3::new(-0.1, -0.1, 0.0),
+            Vector3::new(0.1, -0.1, 0.0),
+            Vector3::new(0.0, 0.1, 0.0),
+        ];
+        let weights = [1.0, -0.3, -0.3, -0.4];
+        let el = FrictionElement::new([0, 1, 2, 3], 4, weights, Vector3::z(), &x0, 2.5, 1e-3);
+        for slip in [0.0, 2e-4, 9e-4, 5e-3, 0.2] {
+            let mut x = x0;
+            x[0] += Vector3::new(slip * 0.8, slip * 0.6, 1e-4);
+            x[2] += Vector3::new(-slip * 0.1, 0.0, 0.0);
+            let mut fast = HyperDual::<4>::constant(0.0);
+            el.derivatives(&x, &mut fast);
+            let mut oracle = el.energy(&HyperDual::<4>::variables(&x));
+            symmetrize(&mut oracle);
+            assert!((fast.value - oracle.value).abs() < 1e-12);
+            for (a, b) in fast.gradient_flat().iter().zip(oracle.gradient_flat()) {
+                assert!((a - b).abs() < 1e-9 * 2.5, "slip {slip}: {a} vs {b}");
+            }
+            let fh = fast.hess.as_flattened().as_flattened().as_flattened();
+            let oh = oracle.hess.as_flattened().as_flattened().as_flattened();
+            for (a, b) in fh.iter().zip(oh) {
+                assert!((a - b).abs() < 1e-6 * (2.5 / 1e-3), "slip {slip}: {a} vs {b}");
+            }
+            // Sliding: the force magnitude on the point is μλ·|c₀|.
+            if slip > 1e-3 {
+                let g = Vector3::from(fast.grad[0]);
+                assert!((g.norm() - 2.5).abs() < 1e-6, "{}", g.norm());
+            }
+        }
+    }
+}

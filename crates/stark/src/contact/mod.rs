@@ -1,0 +1,930 @@
+//! Frictional contact that never penetrates (DESIGN §4): contact objects, the IPC barrier over
+//! point–triangle and edge–edge pairs, continuous collision detection in the line search, lagged
+//! friction, and the exact intersection check.
+//!
+//! Contact is one solver term whose elements are the active barrier pairs followed by the lagged
+//! friction elements. Its energies see only world positions, so the same code will serve rigid
+//! bodies through the kinematic map.
+
+pub mod barrier;
+pub mod friction;
+pub mod pairs;
+
+use crate::deformables::NodeSetHandle;
+use crate::energy::term::{element_stride, NO_DOF};
+use crate::energy::{EnergyTerm, EvalMode, HyperDual, Scalar, StepCheck, Vec3};
+use crate::error::{check_param, Result, StarkError};
+use crate::geometry::aabb::{
+    edge_aabb, edge_swept_aabb, point_aabb, point_swept_aabb, triangle_aabb, triangle_swept_aabb, Aabb,
+};
+use crate::geometry::bvh::Bvh;
+use crate::geometry::ccd::{edge_edge_max_step, point_triangle_max_step, CcdParams};
+use crate::geometry::distance::{
+    edge_edge_closest_parameters_typed, edge_edge_cross_norm_sq, edge_edge_distance_sq_typed, edge_edge_distance_type,
+    point_edge_closest_parameter_typed, point_triangle_closest_barycentric_typed, point_triangle_distance_sq_typed,
+    point_triangle_distance_type, EdgeEdgeDistanceType as Ee, PointEdgeDistanceType, PointTriangleDistanceType as Pt,
+};
+use crate::geometry::intersection::find_edge_triangle_intersections;
+use crate::state::EvalState;
+use barrier::{barrier, BarrierKind};
+use friction::FrictionElement;
+use nalgebra::Vector3;
+use pairs::{pair_derivatives, pair_energy, ContactPair, EdgeEdgeRegion, PairKind};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+/// Contact settings (part of the simulation settings).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ContactSettings {
+    /// Contact thickness of objects that set none, m; objects with neither take no part in
+    /// contact (default: none).
+    pub default_thickness_m: Option<f64>,
+    /// Barrier function (default: log, infinite at contact).
+    pub barrier: BarrierKind,
+    /// Barrier stiffness `κ`, N/m; `None` chooses `m̄/dt²` from the mean mass `m̄` of the contact
+    /// nodes, which balances the barrier's curvature against inertia (default: automatic).
+    pub stiffness: Option<f64>,
+    /// `κ` doubles after a step in which a pair came closer than this fraction of its `d̂`, up to
+    /// `max_stiffness_factor` times its initial value (default: 1e-3).
+    pub min_distance_fraction: f64,
+    /// Upper bound of the adaptive `κ` relative to its initial value (default: 1e8).
+    pub max_stiffness_factor: f64,
+    /// Relative speed below which friction sticks (the smoothing `ε_v`), m/s (default: 0.01).
+    pub friction_stick_slide_threshold_m_s: f64,
+    /// Friction solves per step: 1 lags normal forces and tangents once from the start of the
+    /// step; more re-lag them from the converged state and solve again (default: 1).
+    pub friction_iterations: usize,
+    /// Continuous collision detection in the line search (default: true). Without it only the
+    /// barrier keeps pairs apart, which fast motion can tunnel through.
+    pub ccd: bool,
+}
+
+impl Default for ContactSettings {
+    fn default() -> Self {
+        ContactSettings {
+            default_thickness_m: None,
+            barrier: BarrierKind::Log,
+            stiffness: None,
+            min_distance_fraction: 1e-3,
+            max_stiffness_factor: 1e8,
+            friction_stick_slide_threshold_m_s: 0.01,
+            friction_iterations: 1,
+            ccd: true,
+        }
+    }
+}
+
+impl ContactSettings {
+    /// Check every field.
+    pub fn validate(&self) -> Result<()> {
+        let o = "settings.contact";
+        if let Some(t) = self.default_thickness_m {
+            check_param(
+                o,
+                "default_thickness_m",
+                t,
+                t > 0.0 && t.is_finite(),
+                "must be positive (m)",
+            )?;
+        }
+        if let Some(k) = self.stiffness {
+            check_param(o, "stiffness", k, k > 0.0 && k.is_finite(), "must be positive (N/m)")?;
+        }
+        let v = self.friction_stick_slide_threshold_m_s;
+        check_param(
+            o,
+            "friction_stick_slide_threshold_m_s",
+            v,
+            v > 0.0 && v.is_finite(),
+            "must be positive (m/s)",
+        )?;
+        check_param(
+            o,
+            "friction_iterations",
+            self.friction_iterations as f64,
+            self.friction_iterations >= 1,
+            "must be at least 1",
+        )?;
+        check_param(
+            o,
+            "max_stiffness_factor",
+            self.max_stiffness_factor,
+            self.max_stiffness_factor >= 1.0,
+            "must be at least 1",
+        )
+    }
+}
+
+/// Handle to a contact object.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub struct ContactHandle(pub u32);
+
+/// A contact object: the surface primitives of one deformable object.
+#[derive(Clone, Debug)]
+pub struct ContactObject {
+    /// Label of the object.
+    pub label: String,
+    /// Contact thickness, m; a pair activates within `d̂ = thickness_a + thickness_b`.
+    pub thickness_m: f64,
+    /// Its nodes.
+    pub nodes: NodeSetHandle,
+}
+
+/// Contact statistics of the last evaluation and step.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct ContactStats {
+    /// Active barrier pairs.
+    pub active_pairs: usize,
+    /// Friction elements (lagged pairs with μ > 0).
+    pub friction_pairs: usize,
+    /// Smallest distance among active pairs, m (∞ without contact).
+    pub min_distance_m: f64,
+    /// Barrier stiffness κ, N/m.
+    pub stiffness: f64,
+    /// Smallest CCD step fraction of the last line search.
+    pub min_ccd_fraction: f64,
+    /// Candidate pairs that needed the exact CCD in the last line search.
+    pub ccd_queries: usize,
+}
+
+/// All contact objects and their interactions, as one solver term.
+pub struct Contact {
+    /// Settings.
+    pub settings: ContactSettings,
+    objects: Vec<ContactObject>,
+    points: Vec<u32>,
+    point_obj: Vec<u16>,
+    edges: Vec<[u32; 2]>,
+    edge_obj: Vec<u16>,
+    edge_rest_len_sq: Vec<f64>,
+    triangles: Vec<[u32; 3]>,
+    tri_obj: Vec<u16>,
+    /// `enabled[a * n + b]`: objects a and b collide.
+    enabled: Vec<bool>,
+    /// `friction[a * n + b]`: friction coefficient.
+    friction: Vec<f64>,
+    pairs: Vec<ContactPair>,
+    friction_elements: Vec<FrictionElement>,
+    kappa: f64,
+    kappa_initial: f64,
+    /// Smallest CCD fraction and exact CCD queries of the last line search (`max_step_fraction`
+    /// takes `&self`).
+    ccd_record: std::sync::Mutex<(f64, usize)>,
+    version: u64,
+    relag_pending: bool,
+    lag_solves: usize,
+    /// Statistics.
+    pub stats: ContactStats,
+}
+
+impl Default for Contact {
+    fn default() -> Self {
+        Contact {
+            settings: ContactSettings::default(),
+            objects: vec![],
+            points: vec![],
+            point_obj: vec![],
+            edges: vec![],
+            edge_obj: vec![],
+            edge_rest_len_sq: vec![],
+            triangles: vec![],
+            tri_obj: vec![],
+            enabled: vec![],
+            friction: vec![],
+            pairs: vec![],
+            friction_elements: vec![],
+            kappa: 0.0,
+            kappa_initial: 0.0,
+            ccd_record: std::sync::Mutex::new((1.0, 0)),
+            version: 0,
+            relag_pending: false,
+            lag_solves: 0,
+            stats: ContactStats {
+                min_distance_m: f64::INFINITY,
+                min_ccd_fraction: 1.0,
+                ..Default::default()
+            },
+        }
+    }
+}
+
+fn sorted2(a: u32, b: u32) -> [u32; 2] {
+    if a < b {
+        [a, b]
+    } else {
+        [b, a]
+    }
+}
+
+impl Contact {
+    /// Contact objects.
+    pub fn objects(&self) -> &[ContactObject] {
+        &self.objects
+    }
+
+    /// Active barrier pairs at the last evaluation.
+    pub fn pairs(&self) -> &[ContactPair] {
+        &self.pairs
+    }
+
+    /// Current barrier stiffness κ, N/m (0 before the first step).
+    pub fn stiffness(&self) -> f64 {
+        self.kappa
+    }
+
+    /// Register the surface of an object (indices local to `nodes`): its triangles, its edges
+    /// and the nodes that act as contact points. Self-contact is on.
+    pub fn add_object(
+        &mut self,
+        label: &str,
+        nodes: NodeSetHandle,
+        rest: &[Vector3<f64>],
+        triangles: &[[usize; 3]],
+        edges: &[[usize; 2]],
+        points: &[usize],
+        thickness_m: f64,
+    ) -> Result<ContactHandle> {
+        check_param(
+            label,
+            "contact thickness_m",
+            thickness_m,
+            thickness_m > 0.0 && thickness_m.is_finite(),
+            "must be positive (m)",
+        )?;
+        if self.objects.len() >= u16::MAX as usize {
+            return Err(StarkError::InvalidInput("too many contact objects".into()));
+        }
+        let n = nodes.len as usize;
+        let bad = triangles
+            .iter()
+            .flatten()
+            .chain(edges.iter().flatten())
+            .chain(points)
+            .find(|&&i| i >= n);
+        if let Some(&i) = bad {
+            return Err(StarkError::InvalidInput(format!(
+                "contact surface of '{label}' refers to node {i}, but the object has {n} nodes"
+            )));
+        }
+        let id = self.objects.len() as u16;
+        let g = |i: usize| nodes.global(i) as u32;
+        self.points.extend(points.iter().map(|&p| g(p)));
+        self.point_obj.extend(std::iter::repeat_n(id, points.len()));
+        self.edges.extend(edges.iter().map(|e| [g(e[0]), g(e[1])]));
+        self.edge_obj.extend(std::iter::repeat_n(id, edges.len()));
+        self.edge_rest_len_sq.extend(
+            edges
+                .iter()
+                .map(|e| (rest[nodes.global(e[1])] - rest[nodes.global(e[0])]).norm_squared()),
+        );
+        self.triangles
+            .extend(triangles.iter().map(|t| [g(t[0]), g(t[1]), g(t[2])]));
+        self.tri_obj.extend(std::iter::repeat_n(id, triangles.len()));
+        self.objects.push(ContactObject {
+            label: label.to_string(),
+            thickness_m,
+            nodes,
+        });
+        // Grow the pair tables: everything collides, frictionless, until told otherwise.
+        let m = self.objects.len();
+        let mut enabled = vec![true; m * m];
+        let mut friction = vec![0.0; m * m];
+        for a in 0..m - 1 {
+            for b in 0..m - 1 {
+                enabled[a * m + b] = self.enabled[a * (m - 1) + b];
+                friction[a * m + b] = self.friction[a * (m - 1) + b];
+            }
+        }
+        self.enabled = enabled;
+        self.friction = friction;
+        self.version += 1;
+        Ok(ContactHandle(id as u32))
+    }
+
+    fn check(&self, h: ContactHandle) -> Result<usize> {
+        let i = h.0 as usize;
+        if i < self.objects.len() {
+            Ok(i)
+        } else {
+            Err(StarkError::InvalidHandle {
+                kind: "contact object",
+                index: i,
+                len: self.objects.len(),
+            })
+        }
+    }
+
+    /// The contact object with this label.
+    pub fn object_by_label(&self, label: &str) -> Option<ContactHandle> {
+        self.objects
+            .iter()
+            .position(|o| o.label == label)
+            .map(|i| ContactHandle(i as u32))
+    }
+
+    /// Friction coefficient μ between two objects (`a == b`: self-friction). Takes effect at the
+    /// next step.
+    pub fn set_friction(&mut self, a: ContactHandle, b: ContactHandle, mu: f64) -> Result<()> {
+        let (i, j) = (self.check(a)?, self.check(b)?);
+        check_param(
+            &self.objects[i].label,
+            "friction",
+            mu,
+            mu >= 0.0 && mu.is_finite(),
+            "must be non-negative",
+        )?;
+        let m = self.objects.len();
+        self.friction[i * m + j] = mu;
+        self.friction[j * m + i] = mu;
+        Ok(())
+    }
+
+    /// Friction coefficient between two objects.
+    pub fn friction(&self, a: ContactHandle, b: ContactHandle) -> Result<f64> {
+        let (i, j) = (self.check(a)?, self.check(b)?);
+        Ok(self.friction[i * self.objects.len() + j])
+    }
+
+    /// Switch collisions between two objects (`a == b`: self-collision) off or on.
+    pub fn set_collision(&mut self, a: ContactHandle, b: ContactHandle, enabled: bool) -> Result<()> {
+        let (i, j) = (self.check(a)?, self.check(b)?);
+        let m = self.objects.len();
+        self.enabled[i * m + j] = enabled;
+        self.enabled[j * m + i] = enabled;
+        self.version += 1;
+        Ok(())
+    }
+
+    /// Switch collisions between two objects off (the original's `disable_collision`).
+    pub fn disable_collision(&mut self, a: ContactHandle, b: ContactHandle) -> Result<()> {
+        self.set_collision(a, b, false)
+    }
+
+    /// Change an object's contact thickness, m.
+    pub fn set_thickness(&mut self, a: ContactHandle, thickness_m: f64) -> Result<()> {
+        let i = self.check(a)?;
+        check_param(
+            &self.objects[i].label,
+            "contact thickness_m",
+            thickness_m,
+            thickness_m > 0.0 && thickness_m.is_finite(),
+            "must be positive (m)",
+        )?;
+        self.objects[i].thickness_m = thickness_m;
+        Ok(())
+    }
+
+    fn pair_ok(&self, a: u16, b: u16) -> bool {
+        self.enabled[a as usize * self.objects.len() + b as usize]
+    }
+
+    fn dhat(&self, a: u16, b: u16) -> f64 {
+        self.objects[a as usize].thickness_m + self.objects[b as usize].thickness_m
+    }
+
+    fn mu(&self, a: u16, b: u16) -> f64 {
+        self.friction[a as usize * self.objects.len() + b as usize]
+    }
+
+    /// Pairs of edges and triangles that intersect at positions `x` (ignoring pairs of objects
+    /// whose collisions are off), as `(edge, triangle)` indices into the contact surfaces, with a
+    /// readable description of each. The exact test of `geometry::intersection` (robust
+    /// predicates); used on the initial state and by tests after every step.
+    pub fn find_intersections(&self, x: &[Vector3<f64>]) -> Vec<String> {
+        let edges: Vec<[usize; 2]> = self.edges.iter().map(|e| [e[0] as usize, e[1] as usize]).collect();
+        let tris: Vec<[usize; 3]> = self
+            .triangles
+            .iter()
+            .map(|t| [t[0] as usize, t[1] as usize, t[2] as usize])
+            .collect();
+        let found =
+            find_edge_triangle_intersections(x, &edges, &tris, |e, t| self.pair_ok(self.edge_obj[e], self.tri_obj[t]))
+                .expect("contact primitives refer to existing nodes");
+        found
+            .into_iter()
+            .map(|(e, t)| {
+                format!(
+                    "edge {:?} of '{}' crosses triangle {:?} of '{}'",
+                    self.edges[e],
+                    self.objects[self.edge_obj[e] as usize].label,
+                    self.triangles[t],
+                    self.objects[self.tri_obj[t] as usize].label
+                )
+            })
+            .collect()
+    }
+
+    /// Choose the initial barrier stiffness (if not set) from the node masses and dt.
+    pub fn initialize_stiffness(&mut self, masses: &[f64], dt: f64) {
+        if self.kappa > 0.0 {
+            return;
+        }
+        self.kappa = self.settings.stiffness.unwrap_or_else(|| {
+            let contact_masses: Vec<f64> = self
+                .points
+                .iter()
+                .map(|&p| masses[p as usize])
+                .filter(|&m| m > 0.0)
+                .collect();
+            let mean = if contact_masses.is_empty() {
+                1.0
+            } else {
+                contact_masses.iter().sum::<f64>() / contact_masses.len() as f64
+            };
+            mean / (dt * dt)
+        });
+        self.kappa_initial = self.kappa;
+        self.stats.stiffness = self.kappa;
+    }
+
+    /// Active pairs at positions `x`: broad phase over boxes grown by each object's thickness,
+    /// classification by closest-point region, deduplicated lowest-dimensional pairs.
+    fn detect(&self, x: &[Vector3<f64>]) -> Vec<ContactPair> {
+        if self.objects.is_empty() {
+            return Vec::new();
+        }
+        let th = |o: u16| self.objects[o as usize].thickness_m;
+        let point_boxes: Vec<Aabb> = self
+            .points
+            .par_iter()
+            .zip(&self.point_obj)
+            .map(|(&p, &o)| point_aabb(&x[p as usize], th(o)))
+            .collect();
+        let edge_boxes: Vec<Aabb> = self
+            .edges
+            .par_iter()
+            .zip(&self.edge_obj)
+            .map(|(e, &o)| edge_aabb(&x[e[0] as usize], &x[e[1] as usize], th(o)))
+            .collect();
+        let tri_boxes: Vec<Aabb> = self
+            .triangles
+            .par_iter()
+            .zip(&self.tri_obj)
+            .map(|(t, &o)| triangle_aabb(&x[t[0] as usize], &x[t[1] as usize], &x[t[2] as usize], th(o)))
+            .collect();
+        let mut found: Vec<ContactPair> = Vec::new();
+        if !self.triangles.is_empty() && !self.points.is_empty() {
+            let pb = Bvh::build(&point_boxes);
+            let tb = Bvh::build(&tri_boxes);
+            let candidates = pb.pairs_with(&tb, 0.0);
+            found.extend(
+                candidates
+                    .par_iter()
+                    .filter_map(|&(pi, ti)| self.point_triangle_pair(pi, ti, x))
+                    .collect::<Vec<_>>(),
+            );
+        }
+        if self.edges.len() > 1 {
+            let eb = Bvh::build(&edge_boxes);
+            let candidates = eb.self_pairs(0.0);
+            found.extend(
+                candidates
+                    .par_iter()
+                    .filter_map(|&(a, b)| self.edge_edge_pair(a, b, x))
+                    .collect::<Vec<_>>(),
+            );
+        }
+        found.par_sort_unstable_by(|a, b| (a.kind, a.nodes).cmp(&(b.kind, b.nodes)));
+        found.dedup_by(|a, b| a.kind == b.kind && a.nodes == b.nodes);
+        found
+    }
+
+    fn point_triangle_pair(&self, pi: usize, ti: usize, x: &[Vector3<f64>]) -> Option<ContactPair> {
+        let (po, to) = (self.point_obj[pi], self.tri_obj[ti]);
+        let p = self.points[pi];
+        let t = self.triangles[ti];
+        if !self.pair_ok(po, to) || t.contains(&p) {
+            return None;
+        }
+        let (xp, x0, x1, x2) = (&x[p as usize], &x[t[0] as usize], &x[t[1] as usize], &x[t[2] as usize]);
+        let ty = point_triangle_distance_type(xp, x0, x1, x2);
+        let dhat = self.dhat(po, to);
+        let d_sq = point_triangle_distance_sq_typed(xp, x0, x1, x2, ty);
+        if !(d_sq < dhat * dhat) {
+            return None;
+        }
+        let (kind, full) = match ty {
+            Pt::PointT0 | Pt::PointT1 | Pt::PointT2 => {
+                let v = t[match ty {
+                    Pt::PointT0 => 0,
+                    Pt::PointT1 => 1,
+                    _ => 2,
+                }];
+                let s = sorted2(p, v);
+                (PairKind::PointPoint, [s[0], s[1], NO_DOF, NO_DOF])
+            }
+            Pt::PointEdge0 | Pt::PointEdge1 | Pt::PointEdge2 => {
+                let i = match ty {
+                    Pt::PointEdge0 => 0,
+                    Pt::PointEdge1 => 1,
+                    _ => 2,
+                };
+                let e = sorted2(t[i], t[(i + 1) % 3]);
+                (PairKind::PointEdge, [p, e[0], e[1], NO_DOF])
+            }
+            Pt::PointTriangle => (PairKind::PointTriangle, [p, t[0], t[1], t[2]]),
+        };
+        Some(ContactPair {
+            kind,
+            nodes: full,
+            dhat,
+            eps_x: 0.0,
+            mu: self.mu(po, to),
+        })
+    }
+
+    fn edge_edge_pair(&self, a: usize, b: usize, x: &[Vector3<f64>]) -> Option<ContactPair> {
+        let (oa, ob) = (self.edge_obj[a], self.edge_obj[b]);
+        let (ea, eb) = (self.edges[a], self.edges[b]);
+        if !self.pair_ok(oa, ob) || ea.iter().any(|v| eb.contains(v)) {
+            return None;
+        }
+        let p = |i: u32| &x[i as usize];
+        let (a0, a1, b0, b1) = (p(ea[0]), p(ea[1]), p(eb[0]), p(eb[1]));
+        let ty = edge_edge_distance_type(a0, a1, b0, b1);
+        let dhat = self.dhat(oa, ob);
+        let d_sq = edge_edge_distance_sq_typed(a0, a1, b0, b1, ty);
+        if !(d_sq < dhat * dhat) {
+            return None;
+        }
+        let mu = self.mu(oa, ob);
+        let eps_x = 1e-3 * self.edge_rest_len_sq[a] * self.edge_rest_len_sq[b];
+        if edge_edge_cross_norm_sq(a0, a1, b0, b1) < eps_x {
+            return Some(ContactPair {
+                kind: PairKind::EdgeEdgeMollified(EdgeEdgeRegion::from(ty)),
+                nodes: [ea[0], ea[1], eb[0], eb[1]],
+                dhat,
+                eps_x,
+                mu,
+            });
+        }
+        let mut nodes = [NO_DOF; 4];
+        let kind = match ty {
+            Ee::Ea0Eb0 | Ee::Ea0Eb1 | Ee::Ea1Eb0 | Ee::Ea1Eb1 => {
+                let u = if matches!(ty, Ee::Ea0Eb0 | Ee::Ea0Eb1) {
+                    ea[0]
+                } else {
+                    ea[1]
+                };
+                let v = if matches!(ty, Ee::Ea0Eb0 | Ee::Ea1Eb0) {
+                    eb[0]
+                } else {
+                    eb[1]
+                };
+                nodes[..2].copy_from_slice(&sorted2(u, v));
+                PairKind::PointPoint
+            }
+            Ee::EaEb0 | Ee::EaEb1 => {
+                nodes[0] = if ty == Ee::EaEb0 { eb[0] } else { eb[1] };
+                nodes[1..3].copy_from_slice(&sorted2(ea[0], ea[1]));
+                PairKind::PointEdge
+            }
+            Ee::Ea0Eb | Ee::Ea1Eb => {
+                nodes[0] = if ty == Ee::Ea0Eb { ea[0] } else { ea[1] };
+                nodes[1..3].copy_from_slice(&sorted2(eb[0], eb[1]));
+                PairKind::PointEdge
+            }
+            Ee::EaEb => {
+                let (sa, sb) = (sorted2(ea[0], ea[1]), sorted2(eb[0], eb[1]));
+                let (first, second) = if sa < sb { (sa, sb) } else { (sb, sa) };
+                nodes = [first[0], first[1], second[0], second[1]];
+                PairKind::EdgeEdge
+            }
+        };
+        Some(ContactPair {
+            kind,
+            nodes,
+            dhat,
+            eps_x,
+            mu,
+        })
+    }
+
+    fn stencil_x(nodes: &[u32; 4], x: &[Vector3<f64>]) -> [Vector3<f64>; 4] {
+        nodes.map(|i| if i == NO_DOF { Vector3::zeros() } else { x[i as usize] })
+    }
+
+    /// Lagged friction elements from the pairs active at `x0`.
+    fn lag_friction(&mut self, pairs: &[ContactPair], x0: &[Vector3<f64>], dt: f64) {
+        let eps = self.settings.friction_stick_slide_threshold_m_s * dt;
+        let kappa = self.kappa;
+        let kind = self.settings.barrier;
+        self.friction_elements = pairs
+            .iter()
+            .filter(|p| p.mu > 0.0)
+            .filter_map(|p| {
+                let x = Self::stencil_x(&p.nodes, x0);
+                let weights = match p.kind {
+                    PairKind::PointPoint => [1.0, -1.0, 0.0, 0.0],
+                    PairKind::PointEdge => {
+                        let a =
+                            point_edge_closest_parameter_typed(&x[0], &x[1], &x[2], PointEdgeDistanceType::PointEdge);
+                        [1.0, -(1.0 - a), -a, 0.0]
+                    }
+                    PairKind::PointTriangle => {
+                        let (b1, b2) =
+                            point_triangle_closest_barycentric_typed(&x[0], &x[1], &x[2], &x[3], Pt::PointTriangle);
+                        [1.0, -(1.0 - b1 - b2), -b1, -b2]
+                    }
+                    PairKind::EdgeEdge | PairKind::EdgeEdgeMollified(_) => {
+                        let ty = match p.kind {
+                            PairKind::EdgeEdgeMollified(r) => region_to_type(r),
+                            _ => Ee::EaEb,
+                        };
+                        let (a, b) = edge_edge_closest_parameters_typed(&x[0], &x[1], &x[2], &x[3], ty);
+                        [1.0 - a, a, -(1.0 - b), -b]
+                    }
+                };
+                let rel: Vector3<f64> = (0..p.kind.len()).map(|i| x[i] * weights[i]).sum();
+                let d = rel.norm();
+                let (_, db, _) = barrier(kind, d, p.dhat);
+                let lambda = kappa * db.abs();
+                (lambda > 0.0 && lambda.is_finite())
+                    .then(|| FrictionElement::new(p.nodes, p.kind.len(), weights, rel, &x, p.mu * lambda, eps))
+            })
+            .collect();
+        self.stats.friction_pairs = self.friction_elements.len();
+    }
+
+    fn ccd_fraction(&self, from: &[Vector3<f64>], to: &[Vector3<f64>]) -> (f64, usize) {
+        if self.objects.is_empty() {
+            return (1.0, 0);
+        }
+        let params = CcdParams::default();
+        let pb: Vec<Aabb> = self
+            .points
+            .par_iter()
+            .map(|&p| point_swept_aabb(&from[p as usize], &to[p as usize], 0.0))
+            .collect();
+        let eb: Vec<Aabb> = self
+            .edges
+            .par_iter()
+            .map(|e| {
+                edge_swept_aabb(
+                    &from[e[0] as usize],
+                    &from[e[1] as usize],
+                    &to[e[0] as usize],
+                    &to[e[1] as usize],
+                    0.0,
+                )
+            })
+            .collect();
+        let tb: Vec<Aabb> = self
+            .triangles
+            .par_iter()
+            .map(|t| {
+                triangle_swept_aabb(
+                    &from[t[0] as usize],
+                    &from[t[1] as usize],
+                    &from[t[2] as usize],
+                    &to[t[0] as usize],
+                    &to[t[1] as usize],
+                    &to[t[2] as usize],
+                    0.0,
+                )
+            })
+            .collect();
+        // A cheap conservative filter first: the distance of a pair can shrink by at most the sum
+        // of the largest displacements of its two sides, so a pair farther apart than that
+        // cannot collide within the step.
+        let disp = |i: u32| (to[i as usize] - from[i as usize]).norm();
+        let mut queries = 0usize;
+        let mut alpha = 1.0f64;
+        if !self.triangles.is_empty() && !self.points.is_empty() {
+            let cand = Bvh::build(&pb).pairs_with(&Bvh::build(&tb), 0.0);
+            let (a, q) = cand
+                .par_iter()
+                .map(|&(pi, ti)| {
+                    let p = self.points[pi];
+                    let t = self.triangles[ti];
+                    if !self.pair_ok(self.point_obj[pi], self.tri_obj[ti]) || t.contains(&p) {
+                        return (1.0, 0);
+                    }
+                    let x0 = [
+                        from[p as usize],
+                        from[t[0] as usize],
+                        from[t[1] as usize],
+                        from[t[2] as usize],
+                    ];
+                    let d0 = point_triangle_distance_sq_typed(
+                        &x0[0],
+                        &x0[1],
+                        &x0[2],
+                        &x0[3],
+                        point_triangle_distance_type(&x0[0], &x0[1], &x0[2], &x0[3]),
+                    )
+                    .sqrt();
+                    if d0 > disp(p) + disp(t[0]).max(disp(t[1])).max(disp(t[2])) {
+                        return (1.0, 0);
+                    }
+                    let x1 = [to[p as usize], to[t[0] as usize], to[t[1] as usize], to[t[2] as usize]];
+                    (point_triangle_max_step(&x0, &x1, 0.0, 1.0, &params), 1)
+                })
+                .reduce(|| (1.0, 0), |a, b| (a.0.min(b.0), a.1 + b.1));
+            alpha = alpha.min(a);
+            queries += q;
+        }
+        if self.edges.len() > 1 {
+            let cand = Bvh::build(&eb).self_pairs(0.0);
+            let (a, q) = cand
+                .par_iter()
+                .map(|&(i, j)| {
+                    let (ea, eb) = (self.edges[i], self.edges[j]);
+                    if !self.pair_ok(self.edge_obj[i], self.edge_obj[j]) || ea.iter().any(|v| eb.contains(v)) {
+                        return (1.0, 0);
+                    }
+                    let x0 = [
+                        from[ea[0] as usize],
+                        from[ea[1] as usize],
+                        from[eb[0] as usize],
+                        from[eb[1] as usize],
+                    ];
+                    let ty = edge_edge_distance_type(&x0[0], &x0[1], &x0[2], &x0[3]);
+                    let d0 = edge_edge_distance_sq_typed(&x0[0], &x0[1], &x0[2], &x0[3], ty).sqrt();
+                    if d0 > disp(ea[0]).max(disp(ea[1])) + disp(eb[0]).max(disp(eb[1])) {
+                        return (1.0, 0);
+                    }
+                    let x1 = [
+                        to[ea[0] as usize],
+                        to[ea[1] as usize],
+                        to[eb[0] as usize],
+                        to[eb[1] as usize],
+                    ];
+                    (edge_edge_max_step(&x0, &x1, 0.0, 1.0, &params), 1)
+                })
+                .reduce(|| (1.0, 0), |a, b| (a.0.min(b.0), a.1 + b.1));
+            alpha = alpha.min(a);
+            queries += q;
+        }
+        (alpha, queries)
+    }
+}
+
+fn region_to_type(r: EdgeEdgeRegion) -> Ee {
+    use EdgeEdgeRegion as R;
+    match r {
+        R::Ea0Eb0 => Ee::Ea0Eb0,
+        R::Ea0Eb1 => Ee::Ea0Eb1,
+        R::Ea1Eb0 => Ee::Ea1Eb0,
+        R::Ea1Eb1 => Ee::Ea1Eb1,
+        R::EaEb0 => Ee::EaEb0,
+        R::EaEb1 => Ee::EaEb1,
+        R::Ea0Eb => Ee::Ea0Eb,
+        R::Ea1Eb => Ee::Ea1Eb,
+        R::EaEb => Ee::EaEb,
+    }
+}
+
+/// Write node-space derivatives of a 4-node stencil in the deformable DOF layout (`∂x/∂v = dt·I`).
+fn write_dofs(d: &HyperDual<4>, dt: f64, out: &mut [f64]) {
+    out[0] = d.value;
+    for (k, g) in d.grad.as_flattened().iter().enumerate() {
+        out[1 + k] = dt * g;
+    }
+    let dt2 = dt * dt;
+    let base = 13;
+    for a in 0..4 {
+        for b in 0..4 {
+            let blk = &mut out[base + 9 * (a * 4 + b)..base + 9 * (a * 4 + b) + 9];
+            for i in 0..3 {
+                for j in 0..3 {
+                    blk[3 * i + j] = dt2 * d.hess[a][i][b][j];
+                }
+            }
+        }
+    }
+}
+
+impl EnergyTerm for Contact {
+    fn name(&self) -> &str {
+        "contact"
+    }
+    fn num_elements(&self) -> usize {
+        self.pairs.len() + self.friction_elements.len()
+    }
+    fn stencil_width(&self) -> usize {
+        4
+    }
+    fn write_stencils(&self, _state: &EvalState, out: &mut [u32]) {
+        let all = self
+            .pairs
+            .iter()
+            .map(|p| p.nodes)
+            .chain(self.friction_elements.iter().map(|f| f.nodes));
+        for (o, nodes) in out.chunks_exact_mut(4).zip(all) {
+            o.copy_from_slice(&nodes);
+        }
+    }
+    fn topology_version(&self) -> u64 {
+        self.version
+    }
+    fn energy(&self, state: &EvalState) -> f64 {
+        let kappa = self.kappa;
+        let kind = self.settings.barrier;
+        let barrier_energy: f64 = self
+            .pairs
+            .iter()
+            .map(|p| {
+                pair_energy(
+                    p,
+                    &Self::stencil_x(&p.nodes, state.x).map(|q| Vec3::<f64>::constant(&q)),
+                    kappa,
+                    kind,
+                )
+            })
+            .sum();
+        let friction_energy: f64 = self
+            .friction_elements
+            .iter()
+            .map(|f| f.energy(&Self::stencil_x(&f.nodes, state.x).map(|q| Vec3::<f64>::constant(&q))))
+            .sum();
+        barrier_energy + friction_energy
+    }
+    fn evaluate_element(&self, e: usize, state: &EvalState, _mode: EvalMode, out: &mut [f64]) {
+        debug_assert_eq!(out.len(), element_stride(4));
+        let mut d = HyperDual::<4>::constant(0.0);
+        if e < self.pairs.len() {
+            let p = &self.pairs[e];
+            // Barrier Hessians are indefinite near contact: always projected (IPC).
+            pair_derivatives(
+                p,
+                &Self::stencil_x(&p.nodes, state.x),
+                self.kappa,
+                self.settings.barrier,
+                true,
+                &mut d,
+            );
+        } else {
+            let f = &self.friction_elements[e - self.pairs.len()];
+            f.derivatives(&Self::stencil_x(&f.nodes, state.x), &mut d);
+        }
+        write_dofs(&d, state.dt, out);
+    }
+    fn before_step(&mut self, state: &EvalState) {
+        if self.relag_pending {
+            self.relag_pending = false;
+        } else {
+            self.lag_solves = 1;
+            let pairs = self.detect(state.x);
+            self.lag_friction(&pairs, state.x, state.dt);
+        }
+        self.version += 1;
+    }
+    fn prepare_evaluation(&mut self, state: &EvalState) {
+        let pairs = self.detect(state.x);
+        if pairs
+            .iter()
+            .map(|p| (p.kind, p.nodes))
+            .ne(self.pairs.iter().map(|p| (p.kind, p.nodes)))
+        {
+            self.version += 1;
+        }
+        self.pairs = pairs;
+        self.stats.active_pairs = self.pairs.len();
+    }
+    fn max_step_fraction(&self, from: &EvalState, to: &EvalState) -> f64 {
+        if !self.settings.ccd {
+            return 1.0;
+        }
+        let (alpha, queries) = self.ccd_fraction(from.x, to.x);
+        *self.ccd_record.lock().expect("no poisoned lock") = (alpha, queries);
+        alpha
+    }
+    fn check_converged_step(&mut self, state: &EvalState) -> StepCheck {
+        if self.lag_solves < self.settings.friction_iterations && self.friction.iter().any(|&m| m > 0.0) {
+            let pairs = self.detect(state.x);
+            self.lag_friction(&pairs, state.x, state.dt);
+            self.lag_solves += 1;
+            self.relag_pending = true;
+            return StepCheck::Retry(format!(
+                "friction re-lagged ({} of {})",
+                self.lag_solves, self.settings.friction_iterations
+            ));
+        }
+        StepCheck::Accept
+    }
+    fn after_step(&mut self, state: &EvalState) {
+        let pairs = self.detect(state.x);
+        let mut min_fraction = f64::INFINITY;
+        let mut min_d = f64::INFINITY;
+        for p in &pairs {
+            let (dist, idx) = p.kind.distance();
+            let x = Self::stencil_x(&p.nodes, state.x);
+            let sub: Vec<Vec3<f64>> = idx[..dist.len()].iter().map(|&i| Vec3::constant(&x[i])).collect();
+            let d = pairs::distance_sq(dist, &sub).sqrt();
+            min_d = min_d.min(d);
+            min_fraction = min_fraction.min(d / p.dhat);
+        }
+        self.stats.min_distance_m = min_d;
+        // IPC's adaptive stiffness: a pair this close means the barrier is too soft for the
+        // loads; stiffen it (bounded) so gaps stay resolvable.
+        if min_fraction < self.settings.min_distance_fraction {
+            self.kappa = (self.kappa * 2.0).min(self.kappa_initial * self.settings.max_stiffness_factor);
+        }
+        self.stats.stiffness = self.kappa;
+        let (fraction, queries) = *self.ccd_record.lock().expect("no poisoned lock");
+        self.stats.min_ccd_fraction = fraction;
+        self.stats.ccd_queries = queries;
+    }
+}

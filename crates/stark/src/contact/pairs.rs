@@ -1,0 +1,429 @@
+//! Contact primitive pairs and their barrier energy.
+//!
+//! A candidate point–triangle or edge–edge pair is classified by the region of its closest points
+//! (IPC, Li et al. 2020; `geometry::distance`) and stored as the lowest-dimensional pair that
+//! describes it: point–point, point–edge, point–triangle (plane) or edge–edge (lines). Nearly
+//! parallel edge–edge pairs keep all four nodes and are multiplied by the IPC mollifier
+//! `m(c) = (2 − c/ε)(c/ε)` of `c = ‖e_a × e_b‖²` (`ε = 10⁻³‖ē_a‖²‖ē_b‖²` at rest), which vanishes
+//! as the edges become parallel and keeps the energy smooth there.
+//!
+//! The energy of a pair is `κ·m·b(d)` with `d = √s` and `s` the squared distance of the pair's
+//! region type. Derivatives: generated kernels give `s`, `∇s`, `∇²s` (and those of `c`); the
+//! barrier and mollifier are chained on in closed form; the generic function [`pair_energy`] is
+//! the hyper-dual oracle the tests compare against.
+
+use super::barrier::{barrier, barrier_generic, BarrierKind};
+use crate::energy::psd::project_psd;
+use crate::energy::symbolic::KernelSpec;
+use crate::energy::{points_from_flat, HyperDual, Scalar, Vec3};
+use crate::generated;
+use crate::geometry::distance::EdgeEdgeDistanceType as Ee;
+use nalgebra::Vector3;
+
+/// The stored kind of a contact pair, which fixes its nodes and distance formula.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum PairKind {
+    /// Nodes `[a, b]`: `‖a − b‖²`.
+    PointPoint,
+    /// Nodes `[p, e0, e1]`: squared distance of `p` to the line of the edge.
+    PointEdge,
+    /// Nodes `[p, t0, t1, t2]`: squared distance of `p` to the triangle's plane.
+    PointTriangle,
+    /// Nodes `[ea0, ea1, eb0, eb1]`: squared distance between the two lines.
+    EdgeEdge,
+    /// Nodes `[ea0, ea1, eb0, eb1]` of nearly parallel edges, with the region of their closest
+    /// points; mollified.
+    EdgeEdgeMollified(EdgeEdgeRegion),
+}
+
+/// Region of an edge–edge pair (a copy of [`Ee`] that is `Ord`, for sorting pairs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum EdgeEdgeRegion {
+    /// `ea0`–`eb0`.
+    Ea0Eb0,
+    /// `ea0`–`eb1`.
+    Ea0Eb1,
+    /// `ea1`–`eb0`.
+    Ea1Eb0,
+    /// `ea1`–`eb1`.
+    Ea1Eb1,
+    /// Edge a – `eb0`.
+    EaEb0,
+    /// Edge a – `eb1`.
+    EaEb1,
+    /// `ea0` – edge b.
+    Ea0Eb,
+    /// `ea1` – edge b.
+    Ea1Eb,
+    /// Edge a – edge b.
+    EaEb,
+}
+
+impl From<Ee> for EdgeEdgeRegion {
+    fn from(t: Ee) -> Self {
+        match t {
+            Ee::Ea0Eb0 => Self::Ea0Eb0,
+            Ee::Ea0Eb1 => Self::Ea0Eb1,
+            Ee::Ea1Eb0 => Self::Ea1Eb0,
+            Ee::Ea1Eb1 => Self::Ea1Eb1,
+            Ee::EaEb0 => Self::EaEb0,
+            Ee::EaEb1 => Self::EaEb1,
+            Ee::Ea0Eb => Self::Ea0Eb,
+            Ee::Ea1Eb => Self::Ea1Eb,
+            Ee::EaEb => Self::EaEb,
+        }
+    }
+}
+
+/// The basic distance formulas.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Distance {
+    /// Point–point.
+    PointPoint,
+    /// Point–line: nodes `[p, e0, e1]`.
+    PointLine,
+    /// Point–plane: nodes `[p, t0, t1, t2]`.
+    PointPlane,
+    /// Line–line: nodes `[ea0, ea1, eb0, eb1]`.
+    LineLine,
+}
+
+#[allow(clippy::len_without_is_empty)] // a stencil is never empty
+impl Distance {
+    /// Number of nodes.
+    pub fn len(self) -> usize {
+        match self {
+            Distance::PointPoint => 2,
+            Distance::PointLine => 3,
+            Distance::PointPlane | Distance::LineLine => 4,
+        }
+    }
+}
+
+#[allow(clippy::len_without_is_empty)] // a stencil is never empty
+impl PairKind {
+    /// Number of nodes in the stencil.
+    pub fn len(self) -> usize {
+        match self {
+            PairKind::PointPoint => 2,
+            PairKind::PointEdge => 3,
+            _ => 4,
+        }
+    }
+
+    /// The distance formula and which stencil nodes it uses, in its order.
+    pub fn distance(self) -> (Distance, [usize; 4]) {
+        use EdgeEdgeRegion as R;
+        match self {
+            PairKind::PointPoint => (Distance::PointPoint, [0, 1, 0, 0]),
+            PairKind::PointEdge => (Distance::PointLine, [0, 1, 2, 0]),
+            PairKind::PointTriangle => (Distance::PointPlane, [0, 1, 2, 3]),
+            PairKind::EdgeEdge => (Distance::LineLine, [0, 1, 2, 3]),
+            PairKind::EdgeEdgeMollified(r) => match r {
+                R::Ea0Eb0 => (Distance::PointPoint, [0, 2, 0, 0]),
+                R::Ea0Eb1 => (Distance::PointPoint, [0, 3, 0, 0]),
+                R::Ea1Eb0 => (Distance::PointPoint, [1, 2, 0, 0]),
+                R::Ea1Eb1 => (Distance::PointPoint, [1, 3, 0, 0]),
+                R::EaEb0 => (Distance::PointLine, [2, 0, 1, 0]),
+                R::EaEb1 => (Distance::PointLine, [3, 0, 1, 0]),
+                R::Ea0Eb => (Distance::PointLine, [0, 2, 3, 0]),
+                R::Ea1Eb => (Distance::PointLine, [1, 2, 3, 0]),
+                R::EaEb => (Distance::LineLine, [0, 1, 2, 3]),
+            },
+        }
+    }
+}
+
+/// Squared distance of the formula `kind` on points `x` (in the formula's node order).
+pub fn distance_sq<S: Scalar>(kind: Distance, x: &[Vec3<S>]) -> S {
+    match kind {
+        Distance::PointPoint => (x[0] - x[1]).norm_sq(),
+        Distance::PointLine => {
+            let c = (x[1] - x[0]).cross(&(x[2] - x[0]));
+            c.norm_sq() / (x[2] - x[1]).norm_sq()
+        }
+        Distance::PointPlane => {
+            let n = (x[2] - x[1]).cross(&(x[3] - x[1]));
+            (x[0] - x[1]).dot(&n).sq() / n.norm_sq()
+        }
+        Distance::LineLine => {
+            let n = (x[1] - x[0]).cross(&(x[3] - x[2]));
+            (x[0] - x[2]).dot(&n).sq() / n.norm_sq()
+        }
+    }
+}
+
+/// `‖(ea1 − ea0) × (eb1 − eb0)‖²`, the argument of the edge–edge mollifier.
+pub fn edge_cross_sq<S: Scalar>(x: &[Vec3<S>]) -> S {
+    (x[1] - x[0]).cross(&(x[3] - x[2])).norm_sq()
+}
+
+/// The mollifier `m(c)` with its first and second derivatives.
+pub fn mollifier(c: f64, eps: f64) -> (f64, f64, f64) {
+    if c >= eps {
+        (1.0, 0.0, 0.0)
+    } else {
+        let r = c / eps;
+        ((2.0 - r) * r, 2.0 / eps * (1.0 - r), -2.0 / (eps * eps))
+    }
+}
+
+/// Generated kernels of the squared distances and of the mollifier argument.
+pub fn kernels() -> [KernelSpec; 5] {
+    [
+        KernelSpec {
+            name: "distance_point_point",
+            n_inputs: 6,
+            n_params: 0,
+            energy: |x, _| distance_sq(Distance::PointPoint, &points_from_flat::<_, 2>(x)),
+        },
+        KernelSpec {
+            name: "distance_point_line",
+            n_inputs: 9,
+            n_params: 0,
+            energy: |x, _| distance_sq(Distance::PointLine, &points_from_flat::<_, 3>(x)),
+        },
+        KernelSpec {
+            name: "distance_point_plane",
+            n_inputs: 12,
+            n_params: 0,
+            energy: |x, _| distance_sq(Distance::PointPlane, &points_from_flat::<_, 4>(x)),
+        },
+        KernelSpec {
+            name: "distance_line_line",
+            n_inputs: 12,
+            n_params: 0,
+            energy: |x, _| distance_sq(Distance::LineLine, &points_from_flat::<_, 4>(x)),
+        },
+        KernelSpec {
+            name: "edge_cross",
+            n_inputs: 12,
+            n_params: 0,
+            energy: |x, _| edge_cross_sq(&points_from_flat::<_, 4>(x)),
+        },
+    ]
+}
+
+/// One active contact pair.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ContactPair {
+    /// Kind (fixes the meaning of the nodes).
+    pub kind: PairKind,
+    /// Global node indices; the first `kind.len()` are used.
+    pub nodes: [u32; 4],
+    /// Activation distance `d̂ = thickness_a + thickness_b`, m.
+    pub dhat: f64,
+    /// Mollifier threshold `ε` (m⁴), for mollified edge–edge pairs.
+    pub eps_x: f64,
+    /// Friction coefficient of the pair's objects.
+    pub mu: f64,
+}
+
+/// Energy of a pair, written generically (the oracle): `κ·m(c)·b(√s)`.
+pub fn pair_energy<S: Scalar>(pair: &ContactPair, x: &[Vec3<S>; 4], kappa: f64, kind: BarrierKind) -> S {
+    let (dist, idx) = pair.kind.distance();
+    let sub: Vec<Vec3<S>> = idx[..dist.len()].iter().map(|&i| x[i]).collect();
+    let d = distance_sq(dist, &sub).sqrt();
+    let e = barrier_generic(kind, d, pair.dhat) * kappa;
+    if let PairKind::EdgeEdgeMollified(_) = pair.kind {
+        let r = edge_cross_sq(&x[..]) * (1.0 / pair.eps_x);
+        e * S::select_gt(r, S::constant(1.0), || S::constant(1.0), || (-r + 2.0) * r)
+    } else {
+        e
+    }
+}
+
+fn distance_kernel(kind: Distance) -> crate::energy::Kernel {
+    match kind {
+        Distance::PointPoint => generated::distance_point_point,
+        Distance::PointLine => generated::distance_point_line,
+        Distance::PointPlane => generated::distance_point_plane,
+        Distance::LineLine => generated::distance_line_line,
+    }
+}
+
+/// Value, gradient and Hessian of a pair's energy with respect to its four node positions
+/// (unused nodes get zeros), projected to PSD if asked. Returns the distance `d`, m.
+pub fn pair_derivatives(
+    pair: &ContactPair,
+    x: &[Vector3<f64>; 4],
+    kappa: f64,
+    kind: BarrierKind,
+    project: bool,
+    out: &mut HyperDual<4>,
+) -> f64 {
+    let (dist, idx) = pair.kind.distance();
+    let m = dist.len();
+    let mut flat = [0.0; 12];
+    for (k, &i) in idx[..m].iter().enumerate() {
+        flat[3 * k..3 * k + 3].copy_from_slice(x[i].as_slice());
+    }
+    let mut gs = [0.0; 12];
+    let mut hs = [0.0; 144];
+    let s = distance_kernel(dist)(&flat[..3 * m], &[], &mut gs[..3 * m], &mut hs[..9 * m * m]);
+    let d = s.max(0.0).sqrt();
+    let (b, db, ddb) = barrier(kind, d, pair.dhat);
+    // E(s) = κ b(√s): E' = κ b'/(2d), E'' = κ (b'' − b'/d)/(4d²).
+    let e = kappa * b;
+    let e1 = kappa * db / (2.0 * d);
+    let e2 = kappa * (ddb - db / d) / (4.0 * d * d);
+    // Energy in the sub-stencil's coordinates.
+    let n = 3 * m;
+    let mut g = [0.0; 12];
+    let mut h = [0.0; 144];
+    if b != 0.0 {
+        for i in 0..n {
+            g[i] = e1 * gs[i];
+            for j in 0..n {
+                h[i * n + j] = e2 * gs[i] * gs[j] + e1 * hs[i * n + j];
+            }
+        }
+    }
+    // Embed into the four-node stencil.
+    out.value = e;
+    let og = out.grad.as_flattened_mut();
+    og.iter_mut().for_each(|v| *v = 0.0);
+    let oh = out.hess.as_flattened_mut().as_flattened_mut().as_flattened_mut();
+    oh.iter_mut().for_each(|v| *v = 0.0);
+    let full = |k: usize| 3 * idx[k / 3] + k % 3;
+    if let PairKind::EdgeEdgeMollified(_) = pair.kind {
+        let mut gb = [0.0; 12];
+        let mut hb = [0.0; 144];
+        for i in 0..n {
+            gb[full(i)] = g[i];
+            for j in 0..n {
+                hb[full(i) * 12 + full(j)] = h[i * n + j];
+            }
+        }
+        let mut flat4 = [0.0; 12];
+        for k in 0..4 {
+            flat4[3 * k..3 * k + 3].copy_from_slice(x[k].as_slice());
+        }
+        let mut gc = [0.0; 12];
+        let mut hc = [0.0; 144];
+        let c = generated::edge_cross(&flat4, &[], &mut gc, &mut hc);
+        let (mo, m1, m2) = mollifier(c, pair.eps_x);
+        // (m b)'' = m b'' + b m'' + ∇b ∇mᵀ + ∇m ∇bᵀ, with ∇m = m' ∇c, ∇²m = m'' ∇c∇cᵀ + m' ∇²c.
+        out.value = mo * e;
+        for i in 0..12 {
+            let gm_i = m1 * gc[i];
+            og[i] = mo * gb[i] + e * gm_i;
+            for j in 0..12 {
+                let gm_j = m1 * gc[j];
+                let hm = m2 * gc[i] * gc[j] + m1 * hc[i * 12 + j];
+                oh[i * 12 + j] = mo * hb[i * 12 + j] + e * hm + gb[i] * gm_j + gm_i * gb[j];
+            }
+        }
+        if project {
+            project_psd(oh, 12);
+        }
+    } else {
+        if project {
+            project_psd(&mut h[..n * n], n);
+        }
+        for i in 0..n {
+            og[full(i)] = g[i];
+            for j in 0..n {
+                oh[full(i) * 12 + full(j)] = h[i * n + j];
+            }
+        }
+    }
+    d
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::energy::potential::symmetrize;
+    use rand::{Rng, SeedableRng};
+
+    fn check(pair: &ContactPair, x: &[Vector3<f64>; 4], kind: BarrierKind) {
+        let kappa = 3.7;
+        let mut fast = HyperDual::<4>::constant(0.0);
+        pair_derivatives(pair, x, kappa, kind, false, &mut fast);
+        let mut oracle = pair_energy(pair, &HyperDual::<4>::variables(x), kappa, kind);
+        symmetrize(&mut oracle);
+        let scale = oracle
+            .hess
+            .as_flattened()
+            .as_flattened()
+            .as_flattened()
+            .iter()
+            .fold(0.0f64, |m, v| m.max(v.abs()))
+            .max(1e-300);
+        assert!(
+            (fast.value - oracle.value).abs() <= 1e-10 * oracle.value.abs().max(1e-300),
+            "{pair:?}"
+        );
+        let gs = oracle
+            .gradient_flat()
+            .iter()
+            .fold(0.0f64, |m, v| m.max(v.abs()))
+            .max(1e-300);
+        for (a, b) in fast.gradient_flat().iter().zip(oracle.gradient_flat()) {
+            assert!((a - b).abs() <= 1e-8 * gs, "{pair:?}: gradient {a} vs {b}");
+        }
+        let fh = fast.hess.as_flattened().as_flattened().as_flattened();
+        let oh = oracle.hess.as_flattened().as_flattened().as_flattened();
+        for (a, b) in fh.iter().zip(oh) {
+            assert!((a - b).abs() <= 1e-7 * scale, "{pair:?}: Hessian {a} vs {b}");
+        }
+        // Finite differences of the oracle's energy confirm the oracle itself.
+        let h = 1e-8;
+        for k in 0..12 {
+            let mut xp = *x;
+            let mut xm = *x;
+            xp[k / 3][k % 3] += h;
+            xm[k / 3][k % 3] -= h;
+            let f = |y: &[Vector3<f64>; 4]| pair_energy(pair, &y.map(|p| Vec3::<f64>::constant(&p)), kappa, kind);
+            let fd = (f(&xp) - f(&xm)) / (2.0 * h);
+            assert!(
+                (fd - oracle.gradient_flat()[k]).abs() <= 1e-5 * gs,
+                "{pair:?}: FD {fd} vs {}",
+                oracle.gradient_flat()[k]
+            );
+        }
+    }
+
+    #[test]
+    fn derivatives_of_every_pair_kind_match_the_oracle() {
+        use EdgeEdgeRegion as R;
+        let mut rng = rand::rngs::StdRng::seed_from_u64(7);
+        let kinds = [
+            PairKind::PointPoint,
+            PairKind::PointEdge,
+            PairKind::PointTriangle,
+            PairKind::EdgeEdge,
+            PairKind::EdgeEdgeMollified(R::EaEb),
+            PairKind::EdgeEdgeMollified(R::Ea0Eb1),
+            PairKind::EdgeEdgeMollified(R::EaEb1),
+        ];
+        for kind in kinds {
+            for barrier_kind in [BarrierKind::Log, BarrierKind::Cubic] {
+                for _ in 0..5 {
+                    // Four points within a small ball: distances below d̂ = 0.5.
+                    let x: [Vector3<f64>; 4] = std::array::from_fn(|_| {
+                        Vector3::new(
+                            rng.random_range(-0.2..0.2),
+                            rng.random_range(-0.2..0.2),
+                            rng.random_range(-0.2..0.2),
+                        )
+                    });
+                    let mut x = x;
+                    if let PairKind::EdgeEdgeMollified(_) = kind {
+                        // Nearly parallel edges: the mollifier is active.
+                        x[3] = x[2] + (x[1] - x[0]) * 0.9 + Vector3::new(0.01, -0.004, 0.002);
+                    }
+                    let pair = ContactPair {
+                        kind,
+                        nodes: [0, 1, 2, 3],
+                        dhat: 0.5,
+                        eps_x: 1e-2,
+                        mu: 0.0,
+                    };
+                    check(&pair, &x, barrier_kind);
+                }
+            }
+        }
+    }
+}
