@@ -14,6 +14,22 @@ fn main() {
     if std::env::var("STARK_CHOLESKY").is_ok() {
         sim.settings.newton.linear_solver = stark::solver::LinearSolver::Cholesky;
     }
+    if std::env::var("STARK_PROJECT_ALWAYS").is_ok() {
+        sim.settings.newton.projection = stark::solver::Projection::Always;
+    }
+    if std::env::var("STARK_TOL").is_ok() {
+        stark::scenes::stark_tolerances(&mut sim.settings);
+    }
+    if std::env::var("STARK_EIGEN").is_ok() {
+        sim.settings.contact.hessian = stark::contact::PairHessian::Projected;
+    }
+    if let Ok(k) = std::env::var("STARK_KAPPA") {
+        sim.settings.contact.stiffness = Some(k.parse().unwrap());
+    }
+    if let Ok(b) = std::env::var("STARK_CUBIC") {
+        sim.settings.contact.barrier = stark::contact::BarrierKind::Cubic;
+        sim.settings.contact.stiffness = Some(b.parse().unwrap());
+    }
     if let Some(eta) = std::env::args().nth(3) {
         sim.settings.newton.cg_relative_tolerance = eta.parse().unwrap();
     }

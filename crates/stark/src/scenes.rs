@@ -3,7 +3,7 @@
 
 use crate::deformables::PrescribedParams;
 use crate::error::{Result, StarkError};
-use crate::presets::{SurfaceMaterial, VolumeMaterial};
+use crate::presets::{meshes, SurfaceMaterial, VolumeMaterial};
 use crate::simulation::Simulation;
 use crate::solver::Settings;
 use nalgebra::Vector3;
@@ -54,6 +54,13 @@ pub fn builtin_scenes() -> Vec<BuiltinScene> {
             description: "hanging_cloth at 128×128 quads (benchmark)",
             duration_s: 151.0 / 30.0,
             build: |s| hanging_cloth_n(s, 128, "hanging_cloth_128"),
+        },
+        BuiltinScene {
+            name: "cloth_on_sphere",
+            description:
+                "1 m cotton cloth, 32×32, dropped on a kinematic sphere of radius 0.25 m (contact, self-contact)",
+            duration_s: 3.0,
+            build: cloth_on_sphere,
         },
     ]
 }
@@ -147,5 +154,23 @@ pub fn hanging_deformable_box(mut settings: Settings) -> Result<Simulation> {
             pin.clone(),
         )?;
     }
+    Ok(sim)
+}
+
+/// A cotton cloth falling onto a fixed sphere: drape with self-contact, no friction.
+pub fn cloth_on_sphere(mut settings: Settings) -> Result<Simulation> {
+    settings.name = "cloth_on_sphere".into();
+    settings.contact.default_thickness_m = Some(0.002);
+    let mut sim = Simulation::new(settings)?;
+    let mut cotton = SurfaceMaterial::cotton_fabric();
+    cotton.contact_thickness_m = Some(0.002);
+    let cloth = sim.add_surface_grid("cloth", [1.0, 1.0], [32, 32], &cotton)?;
+    let mut sphere = meshes::sphere_mesh(0.25, 3);
+    for v in &mut sphere.vertices {
+        v.z -= 0.3;
+    }
+    let sphere = sim.add_prescribed_surface("sphere", &sphere.vertices, &sphere.elements, 0.002, 1e6)?;
+    let cloth_contact = cloth.contact.expect("cloth has contact");
+    sim.contact.set_friction(cloth_contact, sphere.contact, 0.5)?;
     Ok(sim)
 }

@@ -48,6 +48,9 @@ pub struct StepReport {
     pub hardening_retries: usize,
     /// Attempts that failed and halved dt.
     pub failed_attempts: usize,
+    /// Why each failed attempt failed (empty when none did).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub failure_reasons: Vec<String>,
     /// Newton iterations over all attempts.
     pub total_newton_iterations: usize,
     /// Wall time of the step, s.
@@ -305,6 +308,7 @@ impl Simulation {
         let mut times = PhaseTimes::default();
         let mut hardening_retries = 0;
         let mut failed_attempts = 0;
+        let mut failure_reasons = Vec::new();
         let mut total_newton = 0;
         loop {
             let dt = self.dt;
@@ -434,6 +438,7 @@ impl Simulation {
                         projected: report.projected,
                         hardening_retries,
                         failed_attempts,
+                        failure_reasons,
                         total_newton_iterations: total_newton,
                         wall_time_s: wall.elapsed().as_secs_f64(),
                         times,
@@ -444,6 +449,7 @@ impl Simulation {
                 }
                 Err(failure) => {
                     self.velocities = velocities;
+                    failure_reasons.push(format!("dt {dt:.3e} s: {failure}"));
                     failed_attempts += 1;
                     self.summary.failed_steps += 1;
                     let half = dt * 0.5;

@@ -9,14 +9,13 @@
 pub mod barrier;
 pub mod friction;
 pub mod pairs;
+pub use barrier::BarrierKind;
 
 use crate::deformables::NodeSetHandle;
 use crate::energy::term::{element_stride, NO_DOF};
 use crate::energy::{EnergyTerm, EvalMode, HyperDual, Scalar, StepCheck, Vec3};
 use crate::error::{check_param, Result, StarkError};
-use crate::geometry::aabb::{
-    edge_aabb, edge_swept_aabb, point_aabb, point_swept_aabb, triangle_aabb, triangle_swept_aabb, Aabb,
-};
+use crate::geometry::aabb::{edge_swept_aabb, point_swept_aabb, triangle_swept_aabb, Aabb};
 use crate::geometry::bvh::Bvh;
 use crate::geometry::ccd::{edge_edge_max_step, point_triangle_max_step, CcdParams};
 use crate::geometry::distance::{
@@ -26,9 +25,10 @@ use crate::geometry::distance::{
 };
 use crate::geometry::intersection::find_edge_triangle_intersections;
 use crate::state::EvalState;
-use barrier::{barrier, BarrierKind};
+use barrier::barrier;
 use friction::FrictionElement;
 use nalgebra::Vector3;
+pub use pairs::PairHessian;
 use pairs::{pair_derivatives, pair_energy, ContactPair, EdgeEdgeRegion, PairKind};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -55,6 +55,8 @@ pub struct ContactSettings {
     /// Friction solves per step: 1 lags normal forces and tangents once from the start of the
     /// step; more re-lag them from the converged state and solve again (default: 1).
     pub friction_iterations: usize,
+    /// Positive semi-definite Hessian used for barrier pairs (default: Gauss–Newton).
+    pub hessian: PairHessian,
     /// Continuous collision detection in the line search (default: true). Without it only the
     /// barrier keeps pairs apart, which fast motion can tunnel through.
     pub ccd: bool,
@@ -70,6 +72,7 @@ impl Default for ContactSettings {
             max_stiffness_factor: 1e8,
             friction_stick_slide_threshold_m_s: 0.01,
             friction_iterations: 1,
+            hessian: PairHessian::GaussNewton,
             ccd: true,
         }
     }
@@ -171,6 +174,9 @@ pub struct Contact {
     /// Smallest CCD fraction and exact CCD queries of the last line search (`max_step_fraction`
     /// takes `&self`).
     ccd_record: std::sync::Mutex<(f64, usize)>,
+    /// Candidates of the last line-search segment (set by `max_step_fraction`, which takes
+    /// `&self`).
+    candidate_cache: std::sync::Mutex<Option<Candidates>>,
     version: u64,
     relag_pending: bool,
     lag_solves: usize,
@@ -197,6 +203,7 @@ impl Default for Contact {
             kappa: 0.0,
             kappa_initial: 0.0,
             ccd_record: std::sync::Mutex::new((1.0, 0)),
+            candidate_cache: std::sync::Mutex::new(None),
             version: 0,
             relag_pending: false,
             lag_solves: 0,
@@ -438,56 +445,98 @@ impl Contact {
         self.stats.stiffness = self.kappa;
     }
 
-    /// Active pairs at positions `x`: broad phase over boxes grown by each object's thickness,
-    /// classification by closest-point region, deduplicated lowest-dimensional pairs.
-    fn detect(&self, x: &[Vector3<f64>]) -> Vec<ContactPair> {
-        if self.objects.is_empty() {
-            return Vec::new();
-        }
+    /// Candidate pairs of the motion `from → to` (a single state when equal): the broad phase
+    /// over swept boxes grown by each object's thickness. Every pair that comes within its `d̂`
+    /// anywhere on the segment is a candidate, so line-search states on it need no new broad
+    /// phase, and CCD uses the same list.
+    fn candidates(&self, from: &[Vector3<f64>], to: &[Vector3<f64>]) -> Candidates {
         let th = |o: u16| self.objects[o as usize].thickness_m;
-        let point_boxes: Vec<Aabb> = self
+        let swept: Vec<Aabb> = self
             .points
             .par_iter()
+            .map(|&p| point_swept_aabb(&from[p as usize], &to[p as usize], 0.0))
+            .collect();
+        let mut c = Candidates::default();
+        if self.objects.is_empty() {
+            c.point_boxes = swept;
+            return c;
+        }
+        let point_boxes: Vec<Aabb> = swept
+            .par_iter()
             .zip(&self.point_obj)
-            .map(|(&p, &o)| point_aabb(&x[p as usize], th(o)))
+            .map(|(b, &o)| b.inflated(th(o)))
             .collect();
-        let edge_boxes: Vec<Aabb> = self
-            .edges
-            .par_iter()
-            .zip(&self.edge_obj)
-            .map(|(e, &o)| edge_aabb(&x[e[0] as usize], &x[e[1] as usize], th(o)))
-            .collect();
-        let tri_boxes: Vec<Aabb> = self
-            .triangles
-            .par_iter()
-            .zip(&self.tri_obj)
-            .map(|(t, &o)| triangle_aabb(&x[t[0] as usize], &x[t[1] as usize], &x[t[2] as usize], th(o)))
-            .collect();
-        let mut found: Vec<ContactPair> = Vec::new();
+        let v = |i: u32| (&from[i as usize], &to[i as usize]);
         if !self.triangles.is_empty() && !self.points.is_empty() {
-            let pb = Bvh::build(&point_boxes);
-            let tb = Bvh::build(&tri_boxes);
-            let candidates = pb.pairs_with(&tb, 0.0);
-            found.extend(
-                candidates
-                    .par_iter()
-                    .filter_map(|&(pi, ti)| self.point_triangle_pair(pi, ti, x))
-                    .collect::<Vec<_>>(),
-            );
+            let tri_boxes: Vec<Aabb> = self
+                .triangles
+                .par_iter()
+                .zip(&self.tri_obj)
+                .map(|(t, &o)| {
+                    let (a, b, c) = (v(t[0]), v(t[1]), v(t[2]));
+                    triangle_swept_aabb(a.0, b.0, c.0, a.1, b.1, c.1, th(o))
+                })
+                .collect();
+            let found = Bvh::build(&point_boxes).pairs_with(&Bvh::build(&tri_boxes), 0.0);
+            c.point_triangle = found
+                .into_par_iter()
+                .filter(|&(pi, ti)| {
+                    self.pair_ok(self.point_obj[pi], self.tri_obj[ti]) && !self.triangles[ti].contains(&self.points[pi])
+                })
+                .map(|(pi, ti)| (pi as u32, ti as u32))
+                .collect();
         }
         if self.edges.len() > 1 {
-            let eb = Bvh::build(&edge_boxes);
-            let candidates = eb.self_pairs(0.0);
-            found.extend(
-                candidates
-                    .par_iter()
-                    .filter_map(|&(a, b)| self.edge_edge_pair(a, b, x))
-                    .collect::<Vec<_>>(),
-            );
+            let edge_boxes: Vec<Aabb> = self
+                .edges
+                .par_iter()
+                .zip(&self.edge_obj)
+                .map(|(e, &o)| {
+                    let (a, b) = (v(e[0]), v(e[1]));
+                    edge_swept_aabb(a.0, b.0, a.1, b.1, th(o))
+                })
+                .collect();
+            let found = Bvh::build(&edge_boxes).self_pairs(0.0);
+            c.edge_edge = found
+                .into_par_iter()
+                .filter(|&(i, j)| {
+                    let (ea, eb) = (self.edges[i], self.edges[j]);
+                    self.pair_ok(self.edge_obj[i], self.edge_obj[j]) && !ea.iter().any(|v| eb.contains(v))
+                })
+                .map(|(i, j)| (i as u32, j as u32))
+                .collect();
         }
+        c.point_boxes = swept;
+        c
+    }
+
+    /// Active pairs at `x` among candidates: classification by closest-point region; candidates
+    /// that reduce to the same pair are merged (their multiplicities summed).
+    fn narrow_phase(&self, c: &Candidates, x: &[Vector3<f64>]) -> Vec<ContactPair> {
+        let mut found: Vec<ContactPair> = c
+            .point_triangle
+            .par_iter()
+            .filter_map(|&(pi, ti)| self.point_triangle_pair(pi as usize, ti as usize, x))
+            .collect();
+        found.par_extend(
+            c.edge_edge
+                .par_iter()
+                .filter_map(|&(a, b)| self.edge_edge_pair(a as usize, b as usize, x)),
+        );
         found.par_sort_unstable_by(|a, b| (a.kind, a.nodes).cmp(&(b.kind, b.nodes)));
-        found.dedup_by(|a, b| a.kind == b.kind && a.nodes == b.nodes);
+        found.dedup_by(|later, kept| {
+            let same = later.kind == kept.kind && later.nodes == kept.nodes;
+            if same {
+                kept.multiplicity += later.multiplicity;
+            }
+            same
+        });
         found
+    }
+
+    /// Active pairs at positions `x` (a fresh broad phase).
+    fn detect(&self, x: &[Vector3<f64>]) -> Vec<ContactPair> {
+        self.narrow_phase(&self.candidates(x, x), x)
     }
 
     fn point_triangle_pair(&self, pi: usize, ti: usize, x: &[Vector3<f64>]) -> Option<ContactPair> {
@@ -531,6 +580,7 @@ impl Contact {
             dhat,
             eps_x: 0.0,
             mu: self.mu(po, to),
+            multiplicity: 1.0,
         })
     }
 
@@ -557,6 +607,7 @@ impl Contact {
                 dhat,
                 eps_x,
                 mu,
+                multiplicity: 1.0,
             });
         }
         let mut nodes = [NO_DOF; 4];
@@ -598,6 +649,7 @@ impl Contact {
             dhat,
             eps_x,
             mu,
+            multiplicity: 1.0,
         })
     }
 
@@ -639,7 +691,7 @@ impl Contact {
                 let rel: Vector3<f64> = (0..p.kind.len()).map(|i| x[i] * weights[i]).sum();
                 let d = rel.norm();
                 let (_, db, _) = barrier(kind, d, p.dhat);
-                let lambda = kappa * db.abs();
+                let lambda = kappa * p.multiplicity * db.abs();
                 (lambda > 0.0 && lambda.is_finite())
                     .then(|| FrictionElement::new(p.nodes, p.kind.len(), weights, rel, &x, p.mu * lambda, eps))
             })
@@ -647,117 +699,89 @@ impl Contact {
         self.stats.friction_pairs = self.friction_elements.len();
     }
 
-    fn ccd_fraction(&self, from: &[Vector3<f64>], to: &[Vector3<f64>]) -> (f64, usize) {
-        if self.objects.is_empty() {
-            return (1.0, 0);
-        }
+    /// Largest fraction of the motion `from → to` free of collisions (additive CCD with a
+    /// minimum separation) over the candidates, and the number of exact CCD queries.
+    fn ccd_fraction(&self, c: &Candidates, from: &[Vector3<f64>], to: &[Vector3<f64>]) -> (f64, usize) {
         let params = CcdParams::default();
-        let pb: Vec<Aabb> = self
-            .points
-            .par_iter()
-            .map(|&p| point_swept_aabb(&from[p as usize], &to[p as usize], 0.0))
-            .collect();
-        let eb: Vec<Aabb> = self
-            .edges
-            .par_iter()
-            .map(|e| {
-                edge_swept_aabb(
-                    &from[e[0] as usize],
-                    &from[e[1] as usize],
-                    &to[e[0] as usize],
-                    &to[e[1] as usize],
-                    0.0,
-                )
-            })
-            .collect();
-        let tb: Vec<Aabb> = self
-            .triangles
-            .par_iter()
-            .map(|t| {
-                triangle_swept_aabb(
-                    &from[t[0] as usize],
-                    &from[t[1] as usize],
-                    &from[t[2] as usize],
-                    &to[t[0] as usize],
-                    &to[t[1] as usize],
-                    &to[t[2] as usize],
-                    0.0,
-                )
-            })
-            .collect();
         // A cheap conservative filter first: the distance of a pair can shrink by at most the sum
         // of the largest displacements of its two sides, so a pair farther apart than that
         // cannot collide within the step.
         let disp = |i: u32| (to[i as usize] - from[i as usize]).norm();
-        let mut queries = 0usize;
-        let mut alpha = 1.0f64;
-        if !self.triangles.is_empty() && !self.points.is_empty() {
-            let cand = Bvh::build(&pb).pairs_with(&Bvh::build(&tb), 0.0);
-            let (a, q) = cand
-                .par_iter()
-                .map(|&(pi, ti)| {
-                    let p = self.points[pi];
-                    let t = self.triangles[ti];
-                    if !self.pair_ok(self.point_obj[pi], self.tri_obj[ti]) || t.contains(&p) {
-                        return (1.0, 0);
-                    }
-                    let x0 = [
-                        from[p as usize],
-                        from[t[0] as usize],
-                        from[t[1] as usize],
-                        from[t[2] as usize],
-                    ];
-                    let d0 = point_triangle_distance_sq_typed(
-                        &x0[0],
-                        &x0[1],
-                        &x0[2],
-                        &x0[3],
-                        point_triangle_distance_type(&x0[0], &x0[1], &x0[2], &x0[3]),
-                    )
-                    .sqrt();
-                    if d0 > disp(p) + disp(t[0]).max(disp(t[1])).max(disp(t[2])) {
-                        return (1.0, 0);
-                    }
-                    let x1 = [to[p as usize], to[t[0] as usize], to[t[1] as usize], to[t[2] as usize]];
-                    (point_triangle_max_step(&x0, &x1, 0.0, 1.0, &params), 1)
-                })
-                .reduce(|| (1.0, 0), |a, b| (a.0.min(b.0), a.1 + b.1));
-            alpha = alpha.min(a);
-            queries += q;
-        }
-        if self.edges.len() > 1 {
-            let cand = Bvh::build(&eb).self_pairs(0.0);
-            let (a, q) = cand
-                .par_iter()
-                .map(|&(i, j)| {
-                    let (ea, eb) = (self.edges[i], self.edges[j]);
-                    if !self.pair_ok(self.edge_obj[i], self.edge_obj[j]) || ea.iter().any(|v| eb.contains(v)) {
-                        return (1.0, 0);
-                    }
-                    let x0 = [
-                        from[ea[0] as usize],
-                        from[ea[1] as usize],
-                        from[eb[0] as usize],
-                        from[eb[1] as usize],
-                    ];
-                    let ty = edge_edge_distance_type(&x0[0], &x0[1], &x0[2], &x0[3]);
-                    let d0 = edge_edge_distance_sq_typed(&x0[0], &x0[1], &x0[2], &x0[3], ty).sqrt();
-                    if d0 > disp(ea[0]).max(disp(ea[1])) + disp(eb[0]).max(disp(eb[1])) {
-                        return (1.0, 0);
-                    }
-                    let x1 = [
-                        to[ea[0] as usize],
-                        to[ea[1] as usize],
-                        to[eb[0] as usize],
-                        to[eb[1] as usize],
-                    ];
-                    (edge_edge_max_step(&x0, &x1, 0.0, 1.0, &params), 1)
-                })
-                .reduce(|| (1.0, 0), |a, b| (a.0.min(b.0), a.1 + b.1));
-            alpha = alpha.min(a);
-            queries += q;
-        }
-        (alpha, queries)
+        let (a_pt, q_pt) = c
+            .point_triangle
+            .par_iter()
+            .map(|&(pi, ti)| {
+                let p = self.points[pi as usize];
+                let t = self.triangles[ti as usize];
+                let x0 = [
+                    from[p as usize],
+                    from[t[0] as usize],
+                    from[t[1] as usize],
+                    from[t[2] as usize],
+                ];
+                let d0 = point_triangle_distance_sq_typed(
+                    &x0[0],
+                    &x0[1],
+                    &x0[2],
+                    &x0[3],
+                    point_triangle_distance_type(&x0[0], &x0[1], &x0[2], &x0[3]),
+                )
+                .sqrt();
+                if d0 > disp(p) + disp(t[0]).max(disp(t[1])).max(disp(t[2])) {
+                    return (1.0, 0);
+                }
+                let x1 = [to[p as usize], to[t[0] as usize], to[t[1] as usize], to[t[2] as usize]];
+                (point_triangle_max_step(&x0, &x1, 0.0, 1.0, &params), 1)
+            })
+            .reduce(|| (1.0, 0), |a, b| (a.0.min(b.0), a.1 + b.1));
+        let (a_ee, q_ee) = c
+            .edge_edge
+            .par_iter()
+            .map(|&(i, j)| {
+                let (ea, eb) = (self.edges[i as usize], self.edges[j as usize]);
+                let x0 = [
+                    from[ea[0] as usize],
+                    from[ea[1] as usize],
+                    from[eb[0] as usize],
+                    from[eb[1] as usize],
+                ];
+                let ty = edge_edge_distance_type(&x0[0], &x0[1], &x0[2], &x0[3]);
+                let d0 = edge_edge_distance_sq_typed(&x0[0], &x0[1], &x0[2], &x0[3], ty).sqrt();
+                if d0 > disp(ea[0]).max(disp(ea[1])) + disp(eb[0]).max(disp(eb[1])) {
+                    return (1.0, 0);
+                }
+                let x1 = [
+                    to[ea[0] as usize],
+                    to[ea[1] as usize],
+                    to[eb[0] as usize],
+                    to[eb[1] as usize],
+                ];
+                (edge_edge_max_step(&x0, &x1, 0.0, 1.0, &params), 1)
+            })
+            .reduce(|| (1.0, 0), |a, b| (a.0.min(b.0), a.1 + b.1));
+        (a_pt.min(a_ee), q_pt + q_ee)
+    }
+}
+
+/// Candidate pairs (indices into the contact points, edges and triangles) of a segment of
+/// motion, and the boxes the contact points sweep along it.
+#[derive(Default)]
+struct Candidates {
+    point_triangle: Vec<(u32, u32)>,
+    edge_edge: Vec<(u32, u32)>,
+    point_boxes: Vec<Aabb>,
+}
+
+impl Candidates {
+    /// Whether every contact point of `x` lies in the box it swept: then `x` is on the segment
+    /// (positions are affine in the step length) and the candidates still cover it.
+    fn cover(&self, points: &[u32], x: &[Vector3<f64>]) -> bool {
+        self.point_boxes.len() == points.len()
+            && points.par_iter().zip(&self.point_boxes).all(|(&p, b)| {
+                let q = &x[p as usize];
+                let tol = 1e-12 * (1.0 + q.amax());
+                (0..3).all(|k| q[k] >= b.min[k] - tol && q[k] <= b.max[k] + tol)
+            })
     }
 }
 
@@ -829,7 +853,7 @@ impl EnergyTerm for Contact {
                 pair_energy(
                     p,
                     &Self::stencil_x(&p.nodes, state.x).map(|q| Vec3::<f64>::constant(&q)),
-                    kappa,
+                    kappa * p.multiplicity,
                     kind,
                 )
             })
@@ -850,9 +874,9 @@ impl EnergyTerm for Contact {
             pair_derivatives(
                 p,
                 &Self::stencil_x(&p.nodes, state.x),
-                self.kappa,
+                self.kappa * p.multiplicity,
                 self.settings.barrier,
-                true,
+                self.settings.hessian,
                 &mut d,
             );
         } else {
@@ -872,7 +896,13 @@ impl EnergyTerm for Contact {
         self.version += 1;
     }
     fn prepare_evaluation(&mut self, state: &EvalState) {
-        let pairs = self.detect(state.x);
+        let cached = self.candidate_cache.get_mut().expect("no poisoned lock").take();
+        let candidates = match cached {
+            Some(c) if c.cover(&self.points, state.x) => c,
+            _ => self.candidates(state.x, state.x),
+        };
+        let pairs = self.narrow_phase(&candidates, state.x);
+        *self.candidate_cache.get_mut().expect("no poisoned lock") = Some(candidates);
         if pairs
             .iter()
             .map(|p| (p.kind, p.nodes))
@@ -884,10 +914,16 @@ impl EnergyTerm for Contact {
         self.stats.active_pairs = self.pairs.len();
     }
     fn max_step_fraction(&self, from: &EvalState, to: &EvalState) -> f64 {
-        if !self.settings.ccd {
+        if self.objects.is_empty() {
             return 1.0;
         }
-        let (alpha, queries) = self.ccd_fraction(from.x, to.x);
+        let candidates = self.candidates(from.x, to.x);
+        let (alpha, queries) = if self.settings.ccd {
+            self.ccd_fraction(&candidates, from.x, to.x)
+        } else {
+            (1.0, 0)
+        };
+        *self.candidate_cache.lock().expect("no poisoned lock") = Some(candidates);
         *self.ccd_record.lock().expect("no poisoned lock") = (alpha, queries);
         alpha
     }
