@@ -20,8 +20,8 @@ fn main() {
     if std::env::var("STARK_TOL").is_ok() {
         stark::scenes::stark_tolerances(&mut sim.settings);
     }
-    if std::env::var("STARK_EIGEN").is_ok() {
-        sim.settings.contact.hessian = stark::contact::PairHessian::Projected;
+    if std::env::var("STARK_GN").is_ok() {
+        sim.settings.contact.hessian = stark::contact::PairHessian::GaussNewton;
     }
     if let Ok(k) = std::env::var("STARK_KAPPA") {
         sim.settings.contact.stiffness = Some(k.parse().unwrap());
@@ -42,6 +42,12 @@ fn main() {
         .unwrap_or(usize::MAX);
     while sim.time() < scene.duration_s - 1e-3 * sim.dt() && iters.len() < max_steps {
         let r = sim.step().unwrap();
+        if !r.failure_reasons.is_empty() || std::env::var("STARK_STEPS").is_ok() {
+            println!(
+                "step {} t {:.4} dt {:.2e} its {} wall {:.2}s contact {:?} failures {:?}",
+                r.step, r.time_s, r.dt_s, r.newton_iterations, r.wall_time_s, r.contact, r.failure_reasons
+            );
+        }
         iters.push(r.newton_iterations);
         ls += r.line_search_evaluations;
         projected += r.projected as usize;

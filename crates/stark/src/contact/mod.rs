@@ -55,7 +55,7 @@ pub struct ContactSettings {
     /// Friction solves per step: 1 lags normal forces and tangents once from the start of the
     /// step; more re-lag them from the converged state and solve again (default: 1).
     pub friction_iterations: usize,
-    /// Positive semi-definite Hessian used for barrier pairs (default: Gauss–Newton).
+    /// Positive semi-definite Hessian used for barrier pairs (default: projected).
     pub hessian: PairHessian,
     /// Continuous collision detection in the line search (default: true). Without it only the
     /// barrier keeps pairs apart, which fast motion can tunnel through.
@@ -72,7 +72,7 @@ impl Default for ContactSettings {
             max_stiffness_factor: 1e8,
             friction_stick_slide_threshold_m_s: 0.01,
             friction_iterations: 1,
-            hessian: PairHessian::GaussNewton,
+            hessian: PairHessian::Projected,
             ccd: true,
         }
     }
@@ -445,36 +445,40 @@ impl Contact {
         self.stats.stiffness = self.kappa;
     }
 
-    /// Candidate pairs of the motion `from → to` (a single state when equal): the broad phase
-    /// over swept boxes grown by each object's thickness. Every pair that comes within its `d̂`
-    /// anywhere on the segment is a candidate, so line-search states on it need no new broad
-    /// phase, and CCD uses the same list.
-    fn candidates(&self, from: &[Vector3<f64>], to: &[Vector3<f64>]) -> Candidates {
-        let th = |o: u16| self.objects[o as usize].thickness_m;
-        let swept: Vec<Aabb> = self
-            .points
-            .par_iter()
-            .map(|&p| point_swept_aabb(&from[p as usize], &to[p as usize], 0.0))
-            .collect();
-        let mut c = Candidates::default();
+    /// Candidate pairs for every state in which each contact point stays within `margin_m`
+    /// (per axis) of the box it sweeps from `from` to `to`: primitives' swept boxes, grown by
+    /// their object's thickness plus the margin, that overlap. A pair that comes within its
+    /// `d̂ = thickness_a + thickness_b` in such a state has overlapping grown boxes, so the list
+    /// serves the line searches (and CCD) of several Newton iterations without a new broad phase.
+    fn candidates(&self, from: &[Vector3<f64>], to: &[Vector3<f64>], margin_m: f64) -> Candidates {
+        let grow = |o: u16| self.objects[o as usize].thickness_m + margin_m;
+        let mut c = Candidates {
+            swept: self
+                .points
+                .par_iter()
+                .map(|&p| point_swept_aabb(&from[p as usize], &to[p as usize], 0.0))
+                .collect(),
+            margin_m,
+            ..Default::default()
+        };
         if self.objects.is_empty() {
-            c.point_boxes = swept;
             return c;
         }
-        let point_boxes: Vec<Aabb> = swept
-            .par_iter()
-            .zip(&self.point_obj)
-            .map(|(b, &o)| b.inflated(th(o)))
-            .collect();
-        let v = |i: u32| (&from[i as usize], &to[i as usize]);
+        let x = |i: u32| (&from[i as usize], &to[i as usize]);
         if !self.triangles.is_empty() && !self.points.is_empty() {
+            let point_boxes: Vec<Aabb> = c
+                .swept
+                .par_iter()
+                .zip(&self.point_obj)
+                .map(|(b, &o)| b.inflated(grow(o)))
+                .collect();
             let tri_boxes: Vec<Aabb> = self
                 .triangles
                 .par_iter()
                 .zip(&self.tri_obj)
                 .map(|(t, &o)| {
-                    let (a, b, c) = (v(t[0]), v(t[1]), v(t[2]));
-                    triangle_swept_aabb(a.0, b.0, c.0, a.1, b.1, c.1, th(o))
+                    let (a, b, c) = (x(t[0]), x(t[1]), x(t[2]));
+                    triangle_swept_aabb(a.0, b.0, c.0, a.1, b.1, c.1, grow(o))
                 })
                 .collect();
             let found = Bvh::build(&point_boxes).pairs_with(&Bvh::build(&tri_boxes), 0.0);
@@ -492,8 +496,8 @@ impl Contact {
                 .par_iter()
                 .zip(&self.edge_obj)
                 .map(|(e, &o)| {
-                    let (a, b) = (v(e[0]), v(e[1]));
-                    edge_swept_aabb(a.0, b.0, a.1, b.1, th(o))
+                    let (a, b) = (x(e[0]), x(e[1]));
+                    edge_swept_aabb(a.0, b.0, a.1, b.1, grow(o))
                 })
                 .collect();
             let found = Bvh::build(&edge_boxes).self_pairs(0.0);
@@ -506,8 +510,20 @@ impl Contact {
                 .map(|(i, j)| (i as u32, j as u32))
                 .collect();
         }
-        c.point_boxes = swept;
         c
+    }
+
+    /// Candidates covering the segment `from → to`: the cached ones if every contact point stays
+    /// within their margin on it, else a new broad phase over the segment with a margin of the
+    /// largest thickness (so the next, shorter Newton steps usually reuse it).
+    fn candidates_for(&self, cache: Option<Candidates>, from: &[Vector3<f64>], to: &[Vector3<f64>]) -> Candidates {
+        if let Some(c) = cache {
+            if c.cover(&self.points, from) && c.cover(&self.points, to) {
+                return c;
+            }
+        }
+        let thickest = self.objects.iter().map(|o| o.thickness_m).fold(0.0, f64::max);
+        self.candidates(from, to, thickest)
     }
 
     /// Active pairs at `x` among candidates: classification by closest-point region; candidates
@@ -536,7 +552,7 @@ impl Contact {
 
     /// Active pairs at positions `x` (a fresh broad phase).
     fn detect(&self, x: &[Vector3<f64>]) -> Vec<ContactPair> {
-        self.narrow_phase(&self.candidates(x, x), x)
+        self.narrow_phase(&self.candidates(x, x, 0.0), x)
     }
 
     fn point_triangle_pair(&self, pi: usize, ti: usize, x: &[Vector3<f64>]) -> Option<ContactPair> {
@@ -547,8 +563,12 @@ impl Contact {
             return None;
         }
         let (xp, x0, x1, x2) = (&x[p as usize], &x[t[0] as usize], &x[t[1] as usize], &x[t[2] as usize]);
-        let ty = point_triangle_distance_type(xp, x0, x1, x2);
         let dhat = self.dhat(po, to);
+        // Cheap rejection: the point is farther than d̂ from the triangle's box on some axis.
+        if (0..3).any(|k| xp[k] + dhat < x0[k].min(x1[k]).min(x2[k]) || xp[k] - dhat > x0[k].max(x1[k]).max(x2[k])) {
+            return None;
+        }
+        let ty = point_triangle_distance_type(xp, x0, x1, x2);
         let d_sq = point_triangle_distance_sq_typed(xp, x0, x1, x2, ty);
         if !(d_sq < dhat * dhat) {
             return None;
@@ -592,8 +612,11 @@ impl Contact {
         }
         let p = |i: u32| &x[i as usize];
         let (a0, a1, b0, b1) = (p(ea[0]), p(ea[1]), p(eb[0]), p(eb[1]));
-        let ty = edge_edge_distance_type(a0, a1, b0, b1);
         let dhat = self.dhat(oa, ob);
+        if (0..3).any(|k| a0[k].max(a1[k]) + dhat < b0[k].min(b1[k]) || a0[k].min(a1[k]) - dhat > b0[k].max(b1[k])) {
+            return None;
+        }
+        let ty = edge_edge_distance_type(a0, a1, b0, b1);
         let d_sq = edge_edge_distance_sq_typed(a0, a1, b0, b1, ty);
         if !(d_sq < dhat * dhat) {
             return None;
@@ -702,7 +725,12 @@ impl Contact {
     /// Largest fraction of the motion `from → to` free of collisions (additive CCD with a
     /// minimum separation) over the candidates, and the number of exact CCD queries.
     fn ccd_fraction(&self, c: &Candidates, from: &[Vector3<f64>], to: &[Vector3<f64>]) -> (f64, usize) {
-        let params = CcdParams::default();
+        // A bounded search: a query that cannot be decided within the budget returns the start of
+        // its earliest undecided box, still a safe (if short) step.
+        let params = CcdParams {
+            max_iterations: 10_000,
+            ..CcdParams::default()
+        };
         // A cheap conservative filter first: the distance of a pair can shrink by at most the sum
         // of the largest displacements of its two sides, so a pair farther apart than that
         // cannot collide within the step.
@@ -763,24 +791,24 @@ impl Contact {
     }
 }
 
-/// Candidate pairs (indices into the contact points, edges and triangles) of a segment of
-/// motion, and the boxes the contact points sweep along it.
+/// Candidate pairs (indices into the contact points, edges and triangles), valid while every
+/// contact point stays within `margin_m` of the box it `swept` when they were found.
 #[derive(Default)]
 struct Candidates {
     point_triangle: Vec<(u32, u32)>,
     edge_edge: Vec<(u32, u32)>,
-    point_boxes: Vec<Aabb>,
+    swept: Vec<Aabb>,
+    margin_m: f64,
 }
 
 impl Candidates {
-    /// Whether every contact point of `x` lies in the box it swept: then `x` is on the segment
-    /// (positions are affine in the step length) and the candidates still cover it.
+    /// Whether every contact point of `x` is within the margin of its swept box.
     fn cover(&self, points: &[u32], x: &[Vector3<f64>]) -> bool {
-        self.point_boxes.len() == points.len()
-            && points.par_iter().zip(&self.point_boxes).all(|(&p, b)| {
+        let m = self.margin_m;
+        self.swept.len() == points.len()
+            && points.par_iter().zip(&self.swept).all(|(&p, b)| {
                 let q = &x[p as usize];
-                let tol = 1e-12 * (1.0 + q.amax());
-                (0..3).all(|k| q[k] >= b.min[k] - tol && q[k] <= b.max[k] + tol)
+                (0..3).all(|k| q[k] >= b.min[k] - m && q[k] <= b.max[k] + m)
             })
     }
 }
@@ -893,14 +921,13 @@ impl EnergyTerm for Contact {
             let pairs = self.detect(state.x);
             self.lag_friction(&pairs, state.x, state.dt);
         }
+        // Objects, thicknesses or enabled pairs may have changed since the last step.
+        *self.candidate_cache.get_mut().expect("no poisoned lock") = None;
         self.version += 1;
     }
     fn prepare_evaluation(&mut self, state: &EvalState) {
         let cached = self.candidate_cache.get_mut().expect("no poisoned lock").take();
-        let candidates = match cached {
-            Some(c) if c.cover(&self.points, state.x) => c,
-            _ => self.candidates(state.x, state.x),
-        };
+        let candidates = self.candidates_for(cached, state.x, state.x);
         let pairs = self.narrow_phase(&candidates, state.x);
         *self.candidate_cache.get_mut().expect("no poisoned lock") = Some(candidates);
         if pairs
@@ -917,7 +944,8 @@ impl EnergyTerm for Contact {
         if self.objects.is_empty() {
             return 1.0;
         }
-        let candidates = self.candidates(from.x, to.x);
+        let cached = self.candidate_cache.lock().expect("no poisoned lock").take();
+        let candidates = self.candidates_for(cached, from.x, to.x);
         let (alpha, queries) = if self.settings.ccd {
             self.ccd_fraction(&candidates, from.x, to.x)
         } else {

@@ -2,6 +2,7 @@
 
 pub mod bad_input_gives_clear_errors;
 pub mod cantilever_matches_linear_elasticity;
+pub mod contact_scenes_never_intersect;
 pub mod default_scene_converges_to_tolerance;
 pub mod free_fall_matches_backward_euler;
 pub mod quasistatic_stretch_converges;

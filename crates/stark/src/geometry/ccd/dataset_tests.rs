@@ -13,7 +13,7 @@ use std::time::Instant;
 use nalgebra::Vector3;
 
 use super::root_finder::Stencil;
-use super::{run_ccd, CcdParams};
+use super::{max_step, run_ccd, CcdParams};
 
 fn data_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/ccd-queries")
@@ -193,6 +193,55 @@ fn ccd_queries_have_no_false_negatives() {
     );
     assert_eq!(total, 3324, "dataset incomplete");
     assert_eq!(false_neg, 0, "CCD missed a collision");
+}
+
+/// The line-search step bound (additive CCD first, the inclusion search when it cannot decide)
+/// never allows a full step through a collision: for every query that collides within `[0, 1]`,
+/// the step is below 1 and the primitives are still apart at the step's end.
+#[test]
+fn ccd_queries_max_step_stops_before_every_collision() {
+    let dir = data_dir();
+    let mut scenes: Vec<PathBuf> = fs::read_dir(&dir).unwrap().map(|e| e.unwrap().path()).collect();
+    scenes.sort();
+    let params = CcdParams::default();
+    let (mut n, mut positives, mut missed, mut full_steps) = (0usize, 0usize, 0usize, 0usize);
+    let start = Instant::now();
+    for scene in scenes.iter().filter(|p| p.is_dir()) {
+        for (kind, stencil) in [
+            ("vertex-face", Stencil::PointTriangle),
+            ("edge-edge", Stencil::EdgeEdge),
+        ] {
+            let Ok(dir) = fs::read_dir(scene.join(kind)) else {
+                continue;
+            };
+            let mut files: Vec<PathBuf> = dir.map(|e| e.unwrap().path()).collect();
+            files.sort();
+            for file in files.iter().filter(|p| p.extension().is_some_and(|e| e == "csv")) {
+                for (x0, x1, truth) in read_queries(file) {
+                    let alpha = max_step(stencil, &x0, &x1, 0.0, 1.0, &params);
+                    n += 1;
+                    full_steps += (alpha == 1.0) as usize;
+                    if truth {
+                        positives += 1;
+                        if alpha >= 1.0 {
+                            missed += 1;
+                            println!(
+                                "STEP THROUGH A COLLISION in {} {kind}: {x0:?} -> {x1:?}",
+                                scene.display()
+                            );
+                        }
+                    }
+                }
+            }
+        }
+    }
+    println!(
+        "max_step: {n} queries, {positives} collisions, {missed} stepped through, {full_steps} full steps, \
+         mean {:.1} µs per query",
+        1e6 * start.elapsed().as_secs_f64() / n as f64
+    );
+    assert_eq!(n, 3324, "dataset incomplete");
+    assert_eq!(missed, 0, "a step went through a collision");
 }
 
 /// How the false positives depend on the tolerance (slow-ish; run with `--ignored --nocapture`).
