@@ -20,6 +20,15 @@
 //! - `[[attachment]]` glues nodes of one object to nodes or triangles of another
 //!   ([`Attachments`](crate::deformables::Attachments)).
 //! - `[[gravity_ramp]]` changes gravity linearly over a time interval.
+//! - Contact: `[settings.contact]` is [`ContactSettings`](crate::contact::ContactSettings), and an
+//!   object takes part in contact when its material sets `contact_thickness_m` or
+//!   `settings.contact.default_thickness_m` is set (as in the API).
+//!   `[[obstacle]]` calls [`Simulation::add_prescribed_surface`]: a kinematic triangle surface
+//!   (generator `sphere`, `box`, `cylinder` or `grid`, a `mesh` file or inline `vertices_m` +
+//!   `triangles`, placed like the objects) whose nodes follow prescribed targets, optionally moved
+//!   by a [`Motion`]. `[[friction]]` calls [`Contact::set_friction`](crate::contact::Contact::set_friction)
+//!   and `[[disable_collision]]` [`Contact::disable_collision`](crate::contact::Contact::disable_collision)
+//!   for a pair of object names (the same name twice for the object with itself).
 //!
 //! Every error is a [`SceneError`] naming the file, the line and column where they are known
 //! (always for TOML; for JSON only for syntax, type and unknown-field errors of the file's
@@ -48,12 +57,15 @@
 //! assert_eq!(scene.name, "doc");
 //! ```
 
+use crate::contact::ContactHandle;
 use crate::deformables::{AttachmentHandle, AttachmentParams, PrescribedHandle, PrescribedParams};
 use crate::error::{Result, StarkError};
 use crate::geometry::mesh;
 use crate::io::mesh_files::{load_tet_mesh, load_triangle_mesh};
 use crate::presets::meshes;
-use crate::presets::{LineHandle, LineMaterial, SurfaceHandle, SurfaceMaterial, VolumeHandle, VolumeMaterial};
+use crate::presets::{
+    LineHandle, LineMaterial, ObstacleHandle, SurfaceHandle, SurfaceMaterial, VolumeHandle, VolumeMaterial,
+};
 use crate::simulation::Simulation;
 use crate::solver::Settings;
 use nalgebra::{Rotation3, Unit, Vector3};
@@ -77,7 +89,8 @@ pub struct LoadedScene {
     pub duration_s: f64,
     /// Scene name: `settings.name` if the file sets it, else the file name without extension.
     pub name: String,
-    /// The objects in creation order (surfaces, then volumes, then lines, each in file order).
+    /// The objects in creation order (surfaces, then volumes, then lines, then obstacles, each in
+    /// file order).
     pub objects: Vec<(String, SceneObject)>,
     /// The `[[prescribed]]` entries in file order.
     pub prescribed: Vec<ScenePrescribed>,
@@ -101,6 +114,8 @@ pub enum SceneObject {
     Volume(VolumeHandle),
     /// A `[[line]]`.
     Line(LineHandle),
+    /// An `[[obstacle]]`.
+    Obstacle(ObstacleHandle),
 }
 
 impl SceneObject {
@@ -110,6 +125,17 @@ impl SceneObject {
             SceneObject::Surface(h) => h.nodes,
             SceneObject::Volume(h) => h.nodes,
             SceneObject::Line(h) => h.nodes,
+            SceneObject::Obstacle(h) => h.nodes,
+        }
+    }
+
+    /// Its contact object, if it takes part in contact (obstacles always do).
+    pub fn contact(&self) -> Option<ContactHandle> {
+        match self {
+            SceneObject::Surface(h) => h.contact,
+            SceneObject::Volume(h) => h.contact,
+            SceneObject::Line(h) => h.contact,
+            SceneObject::Obstacle(h) => Some(h.contact),
         }
     }
 }
@@ -342,6 +368,12 @@ struct SceneFile {
     attachment: Vec<AttachmentEntry>,
     #[serde(default)]
     gravity_ramp: Vec<GravityRampEntry>,
+    #[serde(default)]
+    obstacle: Vec<ObstacleEntry>,
+    #[serde(default)]
+    friction: Vec<FrictionEntry>,
+    #[serde(default)]
+    disable_collision: Vec<DisableCollisionEntry>,
 }
 
 #[derive(Deserialize)]
@@ -414,6 +446,76 @@ struct LineEntry {
     material: toml::Value,
 }
 
+fn default_sphere_subdivisions() -> usize {
+    2
+}
+
+fn default_cylinder_slices() -> usize {
+    16
+}
+
+fn default_cylinder_stacks() -> usize {
+    1
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SphereGenerator {
+    radius_m: f64,
+    #[serde(default = "default_sphere_subdivisions")]
+    subdivisions: usize,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct BoxGenerator {
+    size_m: [f64; 3],
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CylinderGenerator {
+    radius_m: f64,
+    height_m: f64,
+    #[serde(default = "default_cylinder_slices")]
+    slices: usize,
+    #[serde(default = "default_cylinder_stacks")]
+    stacks: usize,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ObstacleEntry {
+    name: String,
+    sphere: Option<SphereGenerator>,
+    #[serde(rename = "box")]
+    box_: Option<BoxGenerator>,
+    cylinder: Option<CylinderGenerator>,
+    grid: Option<SurfaceGrid>,
+    mesh: Option<String>,
+    vertices_m: Option<Vec<[f64; 3]>>,
+    triangles: Option<Vec<[usize; 3]>>,
+    translate_m: Option<[f64; 3]>,
+    rotate_deg: Option<Rotate>,
+    scale: Option<f64>,
+    contact_thickness_m: Option<f64>,
+    stiffness: Option<f64>,
+    motion: Option<Motion>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FrictionEntry {
+    objects: [String; 2],
+    mu: f64,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct DisableCollisionEntry {
+    objects: [String; 2],
+}
+
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct BoxSelection {
@@ -482,6 +584,11 @@ impl At {
         p.0.push(Seg::Key(key.into()));
         p
     }
+    fn index(&self, index: usize) -> At {
+        let mut p = self.clone();
+        p.0.push(Seg::Index(index));
+        p
+    }
     fn keys<S: AsRef<str>>(&self, keys: &[S]) -> At {
         let mut p = self.clone();
         p.0.extend(keys.iter().map(|k| Seg::Key(k.as_ref().into())));
@@ -490,7 +597,17 @@ impl At {
 }
 
 /// Entry arrays whose items are described by name rather than by index.
-const ENTRY_KINDS: [&str; 6] = ["surface", "volume", "line", "prescribed", "attachment", "gravity_ramp"];
+const ENTRY_KINDS: [&str; 9] = [
+    "surface",
+    "volume",
+    "line",
+    "obstacle",
+    "prescribed",
+    "attachment",
+    "gravity_ramp",
+    "friction",
+    "disable_collision",
+];
 
 /// The untyped document, for spans (TOML only) and entry labels.
 enum Tree<'a> {
@@ -513,6 +630,33 @@ impl Tree<'_> {
                 .as_str()
                 .map(str::to_string),
             Tree::Json(v) => v.get(kind)?.get(index)?.get(key)?.as_str().map(str::to_string),
+        }
+    }
+
+    /// The strings of an array field of an entry (`None` unless every item is a string).
+    fn item_strs(&self, kind: &str, index: usize, key: &str) -> Option<Vec<String>> {
+        match self {
+            Tree::Toml(doc) => doc
+                .get(kind)?
+                .get_ref()
+                .as_array()?
+                .get(index)?
+                .get_ref()
+                .as_table()?
+                .get(key)?
+                .get_ref()
+                .as_array()?
+                .iter()
+                .map(|v| v.get_ref().as_str().map(str::to_string))
+                .collect(),
+            Tree::Json(v) => v
+                .get(kind)?
+                .get(index)?
+                .get(key)?
+                .as_array()?
+                .iter()
+                .map(|v| v.as_str().map(str::to_string))
+                .collect(),
         }
     }
 }
@@ -606,7 +750,10 @@ impl Ctx<'_> {
             (Some(name), ..) => format!("{kind} '{name}'"),
             (None, Some(object), ..) => format!("{kind} #{n} (object '{object}')"),
             (None, None, Some(a), Some(b)) => format!("{kind} #{n} ('{a}' to '{b}')"),
-            _ => format!("{kind} #{n}"),
+            _ => match self.tree.item_strs(kind, index, "objects").as_deref() {
+                Some([a, b]) => format!("{kind} #{n} ('{a}' and '{b}')"),
+                _ => format!("{kind} #{n}"),
+            },
         }
     }
 
@@ -891,41 +1038,43 @@ fn object_error(ctx: &Ctx, at: &At, material: &toml::Value, geometry_key: &str, 
 // Geometry
 // ------------------------------------------------------------------------------------------
 
-/// Which geometry an entry gives, checking that it gives exactly one.
+/// Which geometry an entry gives, checking that it gives exactly one. `generators` are the
+/// entry's generator keys and whether each is given, `mesh` whether a mesh file is given (`None`
+/// if the entry takes none), and `elements` the key of the inline element list and whether it is
+/// given.
 fn geometry_key(
     ctx: &Ctx,
     at: &At,
-    generator: (&'static str, bool),
-    mesh: bool,
+    generators: &[(&'static str, bool)],
+    mesh: Option<bool>,
     vertices: bool,
-    elements: bool,
+    elements: (&'static str, bool),
 ) -> std::result::Result<&'static str, SceneError> {
-    let mut given = Vec::new();
-    if generator.1 {
-        given.push(generator.0);
-    }
-    if mesh {
+    let mut given: Vec<&'static str> = generators.iter().filter(|g| g.1).map(|g| g.0).collect();
+    if mesh == Some(true) {
         given.push("mesh");
     }
     if vertices {
         given.push("vertices_m");
     }
+    let (elements_key, elements) = elements;
     if vertices != elements {
         let (has, missing) = if vertices {
-            ("vertices_m", "elements")
+            ("vertices_m", elements_key)
         } else {
-            ("elements", "vertices_m")
+            (elements_key, "vertices_m")
         };
         return Err(ctx.err(
             &at.key(has),
             format!("`{has}` needs `{missing}` (inline geometry gives both)"),
         ));
     }
-    let options = if mesh || generator.0 == "grid" {
-        format!("`{}`, `mesh` or `vertices_m` + `elements`", generator.0)
-    } else {
-        format!("`{}` or `vertices_m` + `elements`", generator.0)
-    };
+    let mut keys: Vec<String> = generators.iter().map(|g| format!("`{}`", g.0)).collect();
+    if mesh.is_some() {
+        keys.push("`mesh`".into());
+    }
+    let last = format!("`vertices_m` + `{elements_key}`");
+    let options = format!("{} or {last}", keys.join(", "));
     match given[..] {
         [one] => Ok(one),
         [] => Err(ctx.err(at, format!("no geometry: give one of {options}"))),
@@ -1010,10 +1159,10 @@ fn build_surface(
     let key = geometry_key(
         ctx,
         at,
-        ("grid", e.grid.is_some()),
-        e.mesh.is_some(),
+        &[("grid", e.grid.is_some())],
+        Some(e.mesh.is_some()),
         e.vertices_m.is_some(),
-        e.elements.is_some(),
+        ("elements", e.elements.is_some()),
     )?;
     let (mut vertices, triangles) = match key {
         "grid" => {
@@ -1053,10 +1202,10 @@ fn build_volume(
     let key = geometry_key(
         ctx,
         at,
-        ("grid", e.grid.is_some()),
-        e.mesh.is_some(),
+        &[("grid", e.grid.is_some())],
+        Some(e.mesh.is_some()),
         e.vertices_m.is_some(),
-        e.elements.is_some(),
+        ("elements", e.elements.is_some()),
     )?;
     let (mut vertices, tets) = match key {
         "grid" => {
@@ -1095,10 +1244,10 @@ fn build_line(sim: &mut Simulation, ctx: &Ctx, at: &At, e: &LineEntry) -> std::r
     let key = geometry_key(
         ctx,
         at,
-        ("segments", e.segments.is_some()),
-        false,
+        &[("segments", e.segments.is_some())],
+        None,
         e.vertices_m.is_some(),
-        e.elements.is_some(),
+        ("elements", e.elements.is_some()),
     )?;
     let (mut vertices, segments) = match key {
         "segments" => {
@@ -1126,6 +1275,151 @@ fn build_line(sim: &mut Simulation, ctx: &Ctx, at: &At, e: &LineEntry) -> std::r
     place(ctx, at, &mut vertices, e.scale, e.rotate_deg.as_ref(), e.translate_m)?;
     sim.add_line(&e.name, &vertices, &segments, &material)
         .map_err(|err| object_error(ctx, at, &e.material, key, err))
+}
+
+/// Most subdivisions of an obstacle `sphere` (`10·4ˢ + 2` vertices: 163842 at 7).
+const MAX_SPHERE_SUBDIVISIONS: usize = 7;
+
+/// Prescribed-position stiffness of an obstacle that gives none, N/m.
+const DEFAULT_OBSTACLE_STIFFNESS: f64 = 1e6;
+
+fn check_positive(ctx: &Ctx, at: &At, key: &str, value: f64, unit: &str) -> std::result::Result<(), SceneError> {
+    if value > 0.0 && value.is_finite() {
+        Ok(())
+    } else {
+        Err(ctx.err(
+            &at.key(key),
+            format!("{key} = {value} must be positive and finite ({unit})"),
+        ))
+    }
+}
+
+fn build_obstacle(
+    sim: &mut Simulation,
+    ctx: &Ctx,
+    base_dir: &Path,
+    at: &At,
+    e: &ObstacleEntry,
+) -> std::result::Result<ObstacleHandle, SceneError> {
+    let key = geometry_key(
+        ctx,
+        at,
+        &[
+            ("sphere", e.sphere.is_some()),
+            ("box", e.box_.is_some()),
+            ("cylinder", e.cylinder.is_some()),
+            ("grid", e.grid.is_some()),
+        ],
+        Some(e.mesh.is_some()),
+        e.vertices_m.is_some(),
+        ("triangles", e.triangles.is_some()),
+    )?;
+    let (mut vertices, triangles) = match key {
+        "sphere" => {
+            let g = e.sphere.as_ref().expect("checked");
+            let at = at.key("sphere");
+            check_positive(ctx, &at, "radius_m", g.radius_m, "m")?;
+            if g.subdivisions > MAX_SPHERE_SUBDIVISIONS {
+                return Err(ctx.err(
+                    &at.key("subdivisions"),
+                    format!(
+                        "subdivisions = {} is too many (at most {MAX_SPHERE_SUBDIVISIONS}; each one quadruples the triangles)",
+                        g.subdivisions
+                    ),
+                ));
+            }
+            let m = meshes::sphere_mesh(g.radius_m, g.subdivisions);
+            (m.vertices, m.elements)
+        }
+        "box" => {
+            let g = e.box_.as_ref().expect("checked");
+            if !g.size_m.iter().all(|s| *s > 0.0 && s.is_finite()) {
+                return Err(ctx.err(
+                    &at.keys(&["box", "size_m"]),
+                    format!("size_m = {:?} must be positive and finite", g.size_m),
+                ));
+            }
+            let m = meshes::box_mesh(Vector3::from(g.size_m));
+            (m.vertices, m.elements)
+        }
+        "cylinder" => {
+            let g = e.cylinder.as_ref().expect("checked");
+            let at = at.key("cylinder");
+            check_positive(ctx, &at, "radius_m", g.radius_m, "m")?;
+            check_positive(ctx, &at, "height_m", g.height_m, "m")?;
+            if g.slices < 3 {
+                return Err(ctx.err(&at.key("slices"), format!("slices = {} must be at least 3", g.slices)));
+            }
+            if g.stacks == 0 {
+                return Err(ctx.err(&at.key("stacks"), "stacks = 0 must be positive"));
+            }
+            let m = meshes::cylinder_mesh(g.radius_m, g.height_m, g.slices, g.stacks);
+            (m.vertices, m.elements)
+        }
+        "grid" => {
+            let g = e.grid.as_ref().expect("checked");
+            check_grid(ctx, &at.key("grid"), &g.size_m, &g.quads, "quads")?;
+            let m = meshes::triangle_grid([0.0, 0.0], g.size_m, g.quads, 0.0);
+            (m.vertices, m.elements)
+        }
+        "mesh" => {
+            let path = mesh_path(base_dir, e.mesh.as_deref().expect("checked"));
+            let m = load_triangle_mesh(&path).map_err(|err| ctx.err(&at.key("mesh"), err.to_string()))?;
+            (m.vertices, m.elements)
+        }
+        _ => {
+            let vertices: Vec<Vector3<f64>> = e
+                .vertices_m
+                .as_ref()
+                .expect("checked")
+                .iter()
+                .map(|v| Vector3::from(*v))
+                .collect();
+            let triangles = e.triangles.clone().expect("checked");
+            if triangles.is_empty() {
+                return Err(ctx.err(&at.key("triangles"), "the triangle list is empty"));
+            }
+            let n = vertices.len();
+            for (i, t) in triangles.iter().enumerate() {
+                if let Some(v) = t.iter().find(|&&v| v >= n) {
+                    return Err(ctx.err(
+                        &at.key("triangles").index(i),
+                        format!("triangle {i} refers to vertex {v}, but there are {n} vertices"),
+                    ));
+                }
+            }
+            (vertices, triangles)
+        }
+    };
+    place(ctx, at, &mut vertices, e.scale, e.rotate_deg.as_ref(), e.translate_m)?;
+    let Some(thickness) = e.contact_thickness_m.or(sim.settings.contact.default_thickness_m) else {
+        return Err(ctx.err(
+            at,
+            format!(
+                "obstacle '{}' has no contact thickness: give `contact_thickness_m` or set \
+                 `settings.contact.default_thickness_m`",
+                e.name
+            ),
+        ));
+    };
+    check_positive(ctx, at, "contact_thickness_m", thickness, "m")?;
+    let stiffness = e.stiffness.unwrap_or(DEFAULT_OBSTACLE_STIFFNESS);
+    check_positive(ctx, at, "stiffness", stiffness, "N/m")?;
+    if let Some(motion) = &e.motion {
+        motion
+            .validate()
+            .map_err(|(field, message)| ctx.err(&at.keys(&["motion", field]), message))?;
+    }
+    let handle = sim
+        .add_prescribed_surface(&e.name, &vertices, &triangles, thickness, stiffness)
+        .map_err(|err| ctx.stark(&at.key(key), err))?;
+    if let Some(motion) = &e.motion {
+        let m = motion.clone();
+        sim.add_time_event(motion.start_s, f64::INFINITY, move |sim, t| {
+            m.apply(sim, handle.prescribed, t)
+        });
+    }
+    Ok(handle)
 }
 
 // ------------------------------------------------------------------------------------------
@@ -1183,7 +1477,17 @@ fn build_prescribed(
     objects: &[(String, SceneObject)],
     e: &PrescribedEntry,
 ) -> std::result::Result<ScenePrescribed, SceneError> {
-    let set = find_object(ctx, &at.key("object"), objects, &e.object)?.nodes();
+    let object = find_object(ctx, &at.key("object"), objects, &e.object)?;
+    if let SceneObject::Obstacle(_) = object {
+        return Err(ctx.err(
+            &at.key("object"),
+            format!(
+                "'{}' is an obstacle, whose nodes are prescribed already (move it with the obstacle's `motion`)",
+                e.object
+            ),
+        ));
+    }
+    let set = object.nodes();
     let defaults = PrescribedParams::default();
     let params = PrescribedParams {
         stiffness: e.stiffness.unwrap_or(defaults.stiffness),
@@ -1356,6 +1660,69 @@ fn build_attachment(
     Ok((label, handle))
 }
 
+/// The contact objects of the two names of a `[[friction]]` or `[[disable_collision]]` entry.
+fn contact_pair(
+    ctx: &Ctx,
+    at: &At,
+    objects: &[(String, SceneObject)],
+    names: &[String; 2],
+) -> std::result::Result<[ContactHandle; 2], SceneError> {
+    let mut handles = [ContactHandle(0); 2];
+    for (i, name) in names.iter().enumerate() {
+        let at = at.key("objects").index(i);
+        let object = find_object(ctx, &at, objects, name)?;
+        handles[i] = object.contact().ok_or_else(|| {
+            let with: Vec<_> = objects
+                .iter()
+                .filter(|(_, o)| o.contact().is_some())
+                .map(|(n, _)| n.as_str())
+                .collect();
+            ctx.err(
+                &at,
+                format!(
+                    "object '{name}' takes no part in contact: it has no contact thickness (set `contact_thickness_m` \
+                     in its material or `settings.contact.default_thickness_m`); objects with contact: {}",
+                    if with.is_empty() {
+                        "none".to_string()
+                    } else {
+                        with.join(", ")
+                    }
+                ),
+            )
+        })?;
+    }
+    Ok(handles)
+}
+
+fn add_friction(
+    sim: &mut Simulation,
+    ctx: &Ctx,
+    at: &At,
+    objects: &[(String, SceneObject)],
+    e: &FrictionEntry,
+) -> std::result::Result<(), SceneError> {
+    let [a, b] = contact_pair(ctx, at, objects, &e.objects)?;
+    if !(e.mu >= 0.0 && e.mu.is_finite()) {
+        return Err(ctx.err(&at.key("mu"), format!("mu = {} must be non-negative and finite", e.mu)));
+    }
+    sim.contact
+        .set_friction(a, b, e.mu)
+        .map_err(|err| ctx.stark(&at.key("mu"), err))
+}
+
+fn add_disable_collision(
+    sim: &mut Simulation,
+    ctx: &Ctx,
+    at: &At,
+    objects: &[(String, SceneObject)],
+    e: &DisableCollisionEntry,
+) -> std::result::Result<(), SceneError> {
+    let [a, b] = contact_pair(ctx, at, objects, &e.objects)?;
+    sim.contact
+        .disable_collision(a, b)
+        .map_err(|err| ctx.stark(&at.key("objects"), err))
+}
+
 fn add_gravity_ramps(
     sim: &mut Simulation,
     ctx: &Ctx,
@@ -1418,16 +1785,26 @@ fn build(
     }
     configure(&mut settings);
     let name = settings.name.clone();
-    let mut sim = Simulation::new(settings).map_err(|e| {
+    // `Settings::validate` does not check the contact settings; the scene does.
+    let settings_error = |e: StarkError| {
         let at = At::default().key("settings");
         match &e {
-            StarkError::InvalidParameter { field, .. } => {
-                let keys: Vec<&str> = field.split('.').collect();
+            StarkError::InvalidParameter { object, field, .. } => {
+                // `object` is "settings" or a sub-table such as "settings.contact".
+                let keys: Vec<&str> = object
+                    .strip_prefix("settings")
+                    .unwrap_or("")
+                    .split('.')
+                    .chain(field.split('.'))
+                    .filter(|k| !k.is_empty())
+                    .collect();
                 ctx.stark(&at.keys(&keys), e)
             }
             _ => ctx.stark(&at, e),
         }
-    })?;
+    };
+    settings.contact.validate().map_err(settings_error)?;
+    let mut sim = Simulation::new(settings).map_err(settings_error)?;
 
     // Names are unique across surfaces, volumes and lines.
     let names = file
@@ -1435,7 +1812,8 @@ fn build(
         .iter()
         .map(|e| ("surface", &e.name))
         .chain(file.volume.iter().map(|e| ("volume", &e.name)))
-        .chain(file.line.iter().map(|e| ("line", &e.name)));
+        .chain(file.line.iter().map(|e| ("line", &e.name)))
+        .chain(file.obstacle.iter().map(|e| ("obstacle", &e.name)));
     let mut seen: Vec<(&str, usize, &String)> = Vec::new();
     let mut counters = std::collections::HashMap::new();
     for (kind, name) in names {
@@ -1466,6 +1844,16 @@ fn build(
     for (i, e) in file.line.iter().enumerate() {
         let h = build_line(&mut sim, ctx, &At::entry("line", i), e)?;
         objects.push((e.name.clone(), SceneObject::Line(h)));
+    }
+    for (i, e) in file.obstacle.iter().enumerate() {
+        let h = build_obstacle(&mut sim, ctx, base_dir, &At::entry("obstacle", i), e)?;
+        objects.push((e.name.clone(), SceneObject::Obstacle(h)));
+    }
+    for (i, e) in file.friction.iter().enumerate() {
+        add_friction(&mut sim, ctx, &At::entry("friction", i), &objects, e)?;
+    }
+    for (i, e) in file.disable_collision.iter().enumerate() {
+        add_disable_collision(&mut sim, ctx, &At::entry("disable_collision", i), &objects, e)?;
     }
     let mut prescribed = Vec::new();
     for (i, e) in file.prescribed.iter().enumerate() {
@@ -1708,6 +2096,19 @@ material = { preset = "elastic_rubber_band", strain = { section_radius_m = 0.003
     const CLOTH: &str = "duration_s = 1.0\n[[surface]]\nname = \"cloth\"\n\
                          grid = { size_m = [1.0, 1.0], quads = [2, 2] }\n";
 
+    /// A cloth with contact (lines 2–5), a rope without (6–9) and an obstacle (10–14).
+    const CONTACT: &str = "duration_s = 1.0\n[[surface]]\nname = \"cloth\"\n\
+                           grid = { size_m = [1.0, 1.0], quads = [2, 2] }\n\
+                           material = { preset = \"cotton_fabric\", contact_thickness_m = 0.002 }\n\
+                           [[line]]\nname = \"rope\"\n\
+                           segments = { begin_m = [0.0, 0.0, 1.0], end_m = [0.0, 0.0, 2.0], count = 2 }\n\
+                           material = \"elastic_rubber_band\"\n\
+                           [[obstacle]]\nname = \"ball\"\nsphere = { radius_m = 0.1, subdivisions = 1 }\n\
+                           translate_m = [0.0, 0.0, -0.5]\ncontact_thickness_m = 0.002\n";
+
+    /// The start of an obstacle entry; its geometry goes on line 4.
+    const OBSTACLE: &str = "duration_s = 1.0\n[[obstacle]]\nname = \"ball\"\n";
+
     /// Each error names the file, the line (and column) and the offending field.
     #[test]
     fn errors_name_file_line_and_field() {
@@ -1844,6 +2245,144 @@ material = { preset = "elastic_rubber_band", strain = { section_radius_m = 0.003
                 "attachment to an unknown object",
                 format!("{CLOTH}material = \"cotton_fabric\"\n[[attachment]]\na = \"cloth\"\nb = \"box\"\nnodes_a = [0]\nnodes_b = [0]\n"),
                 vec!["test.toml:8:1:", "unknown object 'box'", "attachment #1 ('cloth' to 'box') b"],
+            ),
+            (
+                "bad contact setting",
+                "duration_s = 1.0\n[settings.contact]\nfriction_iterations = 0\n".into(),
+                vec!["=test.toml:3:1: `friction_iterations` = 0 on 'settings.contact' must be at least 1 in settings.contact.friction_iterations"],
+            ),
+            (
+                "unknown contact setting",
+                "duration_s = 1.0\n[settings]\ncontact = { thickness_m = 0.001 }\n".into(),
+                vec!["test.toml:3:13: unknown field `thickness_m` in settings.contact, expected"],
+            ),
+            (
+                "friction with an unknown object",
+                format!("{CONTACT}[[friction]]\nobjects = [\"cloth\", \"bal\"]\nmu = 0.5\n"),
+                vec!["=test.toml:16:21: unknown object 'bal' in friction #1 ('cloth' and 'bal') objects[1], expected one of cloth, rope, ball"],
+            ),
+            (
+                "friction with an object without contact",
+                format!("{CONTACT}[[friction]]\nobjects = [\"rope\", \"ball\"]\nmu = 0.5\n"),
+                vec![
+                    "test.toml:16:12: object 'rope' takes no part in contact: it has no contact thickness",
+                    "objects with contact: cloth, ball in friction #1 ('rope' and 'ball') objects[0]",
+                ],
+            ),
+            (
+                "disabled collision of an object without contact",
+                format!("{CONTACT}[[disable_collision]]\nobjects = [\"cloth\", \"rope\"]\n"),
+                vec!["test.toml:16:21: object 'rope' takes no part in contact", "in disable_collision #1 ('cloth' and 'rope') objects[1]"],
+            ),
+            (
+                "disabled collision with an unknown object",
+                format!("{CONTACT}[[disable_collision]]\nobjects = [\"clth\", \"cloth\"]\n"),
+                vec!["test.toml:16:12: unknown object 'clth' in disable_collision #1 ('clth' and 'cloth') objects[0]"],
+            ),
+            (
+                "negative friction",
+                format!("{CONTACT}[[friction]]\nobjects = [\"cloth\", \"ball\"]\nmu = -0.5\n"),
+                vec!["=test.toml:17:1: mu = -0.5 must be non-negative and finite in friction #1 ('cloth' and 'ball') mu"],
+            ),
+            (
+                "unknown field in a friction entry",
+                format!("{CONTACT}[[friction]]\nobjects = [\"cloth\", \"ball\"]\nmu = 0.5\nstatic_mu = 0.6\n"),
+                vec!["test.toml:18:1: unknown field `static_mu` in friction #1 ('cloth' and 'ball'), expected"],
+            ),
+            (
+                "one object in a friction entry",
+                format!("{CONTACT}[[friction]]\nobjects = [\"cloth\"]\nmu = 0.5\n"),
+                vec!["test.toml:16:", "invalid length 1", "friction #1 objects"],
+            ),
+            (
+                "unknown field in a disable_collision entry",
+                format!("{CONTACT}[[disable_collision]]\nobjects = [\"cloth\", \"ball\"]\nmu = 0.5\n"),
+                vec!["test.toml:17:1: unknown field `mu` in disable_collision #1 ('cloth' and 'ball'), expected `objects`"],
+            ),
+            (
+                "prescribed obstacle",
+                format!("{CONTACT}[[prescribed]]\nobject = \"ball\"\nall = true\n"),
+                vec!["test.toml:16:1: 'ball' is an obstacle, whose nodes are prescribed already", "in prescribed #1 (object 'ball') object"],
+            ),
+            (
+                "duplicate obstacle name",
+                format!("{CLOTH}material = \"cotton_fabric\"\n[[obstacle]]\nname = \"cloth\"\nsphere = {{ radius_m = 0.1 }}\n"),
+                vec!["=test.toml:7:1: duplicate object name 'cloth' (already used by surface #1) in obstacle 'cloth' name"],
+            ),
+            (
+                "unknown field in an obstacle",
+                format!("{CONTACT}colour = \"red\"\n"),
+                vec!["test.toml:15:1: unknown field `colour` in obstacle 'ball', expected"],
+            ),
+            (
+                "unknown field in an obstacle generator",
+                format!("{OBSTACLE}sphere = {{ radius = 0.1 }}\ncontact_thickness_m = 0.002\n"),
+                vec!["test.toml:4:12: unknown field `radius` in obstacle 'ball' sphere, expected"],
+            ),
+            (
+                "obstacle without geometry",
+                format!("{OBSTACLE}contact_thickness_m = 0.002\n"),
+                vec!["test.toml:2:", "no geometry: give one of `sphere`, `box`, `cylinder`, `grid`, `mesh` or `vertices_m` + `triangles` in obstacle 'ball'"],
+            ),
+            (
+                "obstacle with two geometries",
+                format!("{OBSTACLE}sphere = {{ radius_m = 0.1 }}\nbox = {{ size_m = [1.0, 1.0, 1.0] }}\ncontact_thickness_m = 0.002\n"),
+                vec!["test.toml:5:1: more than one geometry (sphere, box)", "in obstacle 'ball' box"],
+            ),
+            (
+                "obstacle without contact thickness",
+                format!("{OBSTACLE}sphere = {{ radius_m = 0.1 }}\n"),
+                vec!["test.toml:2:", "obstacle 'ball' has no contact thickness: give `contact_thickness_m`", "in obstacle 'ball'"],
+            ),
+            (
+                "negative obstacle contact thickness",
+                format!("{OBSTACLE}sphere = {{ radius_m = 0.1 }}\ncontact_thickness_m = -0.002\n"),
+                vec!["=test.toml:5:1: contact_thickness_m = -0.002 must be positive and finite (m) in obstacle 'ball' contact_thickness_m"],
+            ),
+            (
+                "bad obstacle stiffness",
+                format!("{OBSTACLE}sphere = {{ radius_m = 0.1 }}\ncontact_thickness_m = 0.002\nstiffness = 0.0\n"),
+                vec!["=test.toml:6:1: stiffness = 0 must be positive and finite (N/m) in obstacle 'ball' stiffness"],
+            ),
+            (
+                "bad sphere radius",
+                format!("{OBSTACLE}sphere = {{ radius_m = -0.1 }}\ncontact_thickness_m = 0.002\n"),
+                vec!["=test.toml:4:12: radius_m = -0.1 must be positive and finite (m) in obstacle 'ball' sphere.radius_m"],
+            ),
+            (
+                "too many sphere subdivisions",
+                format!("{OBSTACLE}sphere = {{ radius_m = 0.1, subdivisions = 12 }}\ncontact_thickness_m = 0.002\n"),
+                vec!["test.toml:4:28: subdivisions = 12 is too many (at most 7", "in obstacle 'ball' sphere.subdivisions"],
+            ),
+            (
+                "bad box",
+                format!("{OBSTACLE}box = {{ size_m = [1.0, 0.0, 1.0] }}\ncontact_thickness_m = 0.002\n"),
+                vec!["test.toml:4:9: size_m = [1.0, 0.0, 1.0] must be positive and finite in obstacle 'ball' box.size_m"],
+            ),
+            (
+                "bad cylinder",
+                format!("{OBSTACLE}cylinder = {{ radius_m = 0.1, height_m = 0.2, slices = 2 }}\ncontact_thickness_m = 0.002\n"),
+                vec!["test.toml:4:", "slices = 2 must be at least 3 in obstacle 'ball' cylinder.slices"],
+            ),
+            (
+                "inline obstacle triangle out of range",
+                format!("{OBSTACLE}vertices_m = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]\ntriangles = [[0, 1, 2], [0, 1, 3]]\ncontact_thickness_m = 0.002\n"),
+                vec!["=test.toml:5:25: triangle 1 refers to vertex 3, but there are 3 vertices in obstacle 'ball' triangles[1]"],
+            ),
+            (
+                "inline obstacle without triangles",
+                format!("{OBSTACLE}vertices_m = [[0.0, 0.0, 0.0]]\ncontact_thickness_m = 0.002\n"),
+                vec!["test.toml:4:1: `vertices_m` needs `triangles` (inline geometry gives both) in obstacle 'ball' vertices_m"],
+            ),
+            (
+                "missing obstacle mesh",
+                format!("{OBSTACLE}mesh = \"no/such/ball.obj\"\ncontact_thickness_m = 0.002\n"),
+                vec!["test.toml:4:1:", "ball.obj' not found", "obstacle 'ball' mesh"],
+            ),
+            (
+                "obstacle motion without axis",
+                format!("{CONTACT}motion = {{ angular_velocity_deg_s = 90.0 }}\n"),
+                vec!["test.toml:15:12:", "needs an `axis`", "obstacle 'ball' motion.angular_velocity_deg_s"],
             ),
         ];
         let mut failures = Vec::new();
@@ -2017,6 +2556,11 @@ material = "cotton_fabric"
 name = "tet"
 mesh = "../meshes/tet.vtk"
 material = "soft_rubber"
+[[obstacle]]
+name = "plate"
+mesh = "../meshes/square.obj"
+translate_m = [0.0, 0.0, -1.0]
+contact_thickness_m = 0.001
 "#,
         )
         .unwrap();
@@ -2029,6 +2573,11 @@ material = "soft_rubber"
         assert_eq!(sim.deformables.triangles.num_elements(), 2);
         assert_eq!(sim.deformables.tets.num_elements(), 1);
         assert_eq!(scene.name, "meshes");
+        let Some(SceneObject::Obstacle(plate)) = scene.object("plate") else {
+            panic!("no obstacle 'plate'")
+        };
+        assert_eq!(sim.positions(plate.nodes)[2], Vector3::new(1.0, 1.0, -1.0));
+        assert_eq!(sim.contact.objects().len(), 1);
 
         // A volume needs tets; a missing file names the resolved path and the line.
         let text = std::fs::read_to_string(&scene_path)
@@ -2101,5 +2650,228 @@ to_m_s2 = [0.0, 0.0, -1.0]
         let t = sim.time();
         let expected = -9.81 + (9.81 - 1.0) * t;
         assert!((sim.gravity().z - expected).abs() < 1e-12);
+    }
+
+    #[test]
+    fn cloth_on_sphere_scene_matches_the_builtin() {
+        let scene = load_scene_with(&repo_scene("cloth_on_sphere.toml"), quiet).unwrap();
+        assert_eq!((scene.name.as_str(), scene.duration_s), ("cloth_on_sphere", 3.0));
+        let Some(SceneObject::Obstacle(sphere)) = scene.object("sphere").copied() else {
+            panic!("no obstacle 'sphere'")
+        };
+        let mut from_file = scene.simulation;
+        let mut settings = Settings::default();
+        quiet(&mut settings);
+        let mut builtin = crate::scenes::cloth_on_sphere(settings).unwrap();
+        assert_eq!(from_file.settings, builtin.settings);
+        // Same nodes (the cloth's 33², then the sphere's 642) at the same positions.
+        assert_eq!(from_file.nodes.len(), 33 * 33 + 642);
+        assert_eq!(from_file.nodes.len(), builtin.nodes.len());
+        assert_eq!(bits(&from_file.nodes.x), bits(&builtin.nodes.x));
+        let d = (&from_file.deformables, &builtin.deformables);
+        assert_eq!(d.0.triangles.num_elements(), d.1.triangles.num_elements());
+        assert_eq!(d.0.flat_bending.num_elements(), d.1.flat_bending.num_elements());
+        // Same contact objects, thicknesses and friction coefficients.
+        let (fc, bc) = (&from_file.contact, &builtin.contact);
+        let describe = |c: &crate::contact::Contact| -> Vec<(String, f64, u32, u32)> {
+            c.objects()
+                .iter()
+                .map(|o| (o.label.clone(), o.thickness_m, o.nodes.first, o.nodes.len))
+                .collect()
+        };
+        assert_eq!(describe(fc), describe(bc));
+        assert_eq!(
+            describe(fc),
+            [("cloth".into(), 0.002, 0, 1089), ("sphere".into(), 0.002, 1089, 642)]
+        );
+        for a in 0..2 {
+            for b in 0..2 {
+                let (ha, hb) = (ContactHandle(a), ContactHandle(b));
+                assert_eq!(fc.friction(ha, hb).unwrap(), bc.friction(ha, hb).unwrap());
+            }
+        }
+        assert_eq!(fc.friction(ContactHandle(0), sphere.contact).unwrap(), 0.5);
+        // The sphere is held as in the built-in scene.
+        let pp = (&d.0.prescribed, &d.1.prescribed);
+        assert_eq!(
+            pp.0.params(sphere.prescribed).unwrap(),
+            pp.1.params(PrescribedHandle(0)).unwrap()
+        );
+        assert_eq!(pp.0.params(sphere.prescribed).unwrap().stiffness, 1e6);
+        assert_eq!(from_file.output.meshes.len(), builtin.output.meshes.len());
+        // One step (the cloth is still 5 cm above the sphere) gives the same positions.
+        from_file.step().unwrap();
+        builtin.step().unwrap();
+        assert!(builtin.nodes.x.iter().any(|p| p.z < -1e-3), "nothing moved");
+        assert_eq!(bits(&from_file.nodes.x), bits(&builtin.nodes.x));
+    }
+
+    /// A sheet pierced by a blade (an obstacle), three more obstacles, friction and a disabled
+    /// collision.
+    const OBSTACLES: &str = r#"
+duration_s = 1.0
+[settings]
+contact.default_thickness_m = 0.001
+[[surface]]
+name = "sheet"
+vertices_m = [[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [0.0, 1.0, 0.0]]
+elements = [[0, 1, 2]]
+material = "cotton_fabric"
+[[obstacle]]
+name = "blade"
+vertices_m = [[0.0, 0.0, -1.0], [0.5, 0.0, 1.0], [-0.5, 0.0, 1.0]]
+triangles = [[0, 1, 2]]
+[[obstacle]]
+name = "crate"
+box = { size_m = [0.2, 0.4, 0.6] }
+translate_m = [5.0, 0.0, 0.0]
+contact_thickness_m = 0.003
+stiffness = 1e5
+[[obstacle]]
+name = "drum"
+cylinder = { radius_m = 0.1, height_m = 0.3 }
+rotate_deg = { angle = 90.0, axis = [1.0, 0.0, 0.0] }
+translate_m = [-5.0, 0.0, 0.0]
+[[obstacle]]
+name = "floor"
+grid = { size_m = [2.0, 2.0], quads = [2, 2] }
+scale = 2.0
+translate_m = [0.0, 0.0, -3.0]
+[[friction]]
+objects = ["sheet", "sheet"]
+mu = 0.3
+[[friction]]
+objects = ["sheet", "floor"]
+mu = 0.5
+[[disable_collision]]
+objects = ["sheet", "blade"]
+"#;
+
+    #[test]
+    fn obstacles_friction_and_disabled_collisions() {
+        let scene = parse(OBSTACLES);
+        let sim = &scene.simulation;
+        let names: Vec<_> = scene.objects.iter().map(|(n, _)| n.as_str()).collect();
+        assert_eq!(names, ["sheet", "blade", "crate", "drum", "floor"]);
+        let obstacle = |name: &str| match scene.object(name) {
+            Some(SceneObject::Obstacle(h)) => *h,
+            other => panic!("{name} is {other:?}"),
+        };
+        // Geometry counts: a closed box (8, 12), a capped cylinder (16·2 + 2, 64), a 2×2 grid.
+        let contact = &sim.contact;
+        let count = |name: &str| obstacle(name).nodes.len;
+        assert_eq!(
+            [count("blade"), count("crate"), count("drum"), count("floor")],
+            [3, 8, 34, 9]
+        );
+        let floor = sim.positions(obstacle("floor").nodes);
+        assert!(floor
+            .iter()
+            .all(|p| p.z == -3.0 && p.x.abs() <= 2.0 && p.y.abs() <= 2.0));
+        assert!(floor.iter().any(|p| p.x == 2.0));
+        let drum = sim.positions(obstacle("drum").nodes);
+        // Turned about X: the axis is along Y.
+        assert!(drum
+            .iter()
+            .all(|p| ((p.x + 5.0).powi(2) + p.z.powi(2)).sqrt() <= 0.1 + 1e-12));
+        // Thickness: given, else the default; stiffness: given, else 1e6; all self-collision off.
+        let thickness: Vec<_> = contact.objects().iter().map(|o| o.thickness_m).collect();
+        assert_eq!(thickness, [0.001, 0.001, 0.003, 0.001, 0.001]);
+        let pp = &sim.deformables.prescribed;
+        assert_eq!(pp.params(obstacle("crate").prescribed).unwrap().stiffness, 1e5);
+        assert_eq!(pp.params(obstacle("drum").prescribed).unwrap().stiffness, 1e6);
+        assert_eq!(
+            pp.params(obstacle("crate").prescribed).unwrap().tolerance_m,
+            1e-4 * 0.003
+        );
+        // Friction, including self-friction.
+        let sheet = scene.object("sheet").unwrap().contact().unwrap();
+        let mu = |h: ContactHandle| contact.friction(sheet, h).unwrap();
+        assert_eq!(mu(sheet), 0.3);
+        assert_eq!(mu(obstacle("floor").contact), 0.5);
+        assert_eq!(mu(obstacle("blade").contact), 0.0);
+        assert_eq!(contact.friction(obstacle("floor").contact, sheet).unwrap(), 0.5);
+        // The blade pierces the sheet: only with the collision on is that an intersection.
+        assert!(contact.find_intersections(&sim.nodes.x).is_empty());
+        let on = parse(&OBSTACLES.replace("[[disable_collision]]\nobjects = [\"sheet\", \"blade\"]\n", ""));
+        let found = on.simulation.contact.find_intersections(&on.simulation.nodes.x);
+        assert!(!found.is_empty());
+    }
+
+    #[test]
+    fn obstacle_motions_move_the_obstacle() {
+        let mut scene = parse(
+            r#"
+duration_s = 1.0
+[settings]
+gravity_m_s2 = [0.0, 0.0, 0.0]
+[[obstacle]]
+name = "crate"
+box = { size_m = [0.2, 0.2, 0.2] }
+contact_thickness_m = 0.001
+motion = { velocity_m_s = [0.0, 0.0, 0.3], angular_velocity_deg_s = 90.0, axis = [0.0, 0.0, 1.0], center_m = [0.1, 0.0, 0.0] }
+"#,
+        );
+        let Some(SceneObject::Obstacle(crate_)) = scene.object("crate").copied() else {
+            panic!()
+        };
+        let sim = &mut scene.simulation;
+        let reference = sim.positions(crate_.nodes).to_vec();
+        sim.step().unwrap();
+        let t = sim.time();
+        assert!(t > 0.0);
+        let (s, c) = (90.0f64 * t).to_radians().sin_cos();
+        let targets = sim.deformables.prescribed.targets(crate_.prescribed).unwrap().to_vec();
+        for (p, q) in reference.iter().zip(&targets) {
+            let (x, y) = (p.x - 0.1, p.y);
+            let expected = Vector3::new(c * x - s * y + 0.1, s * x + c * y, p.z + 0.3 * t);
+            assert!((q - expected).norm() < 1e-12, "{q} vs {expected}");
+        }
+        // The nodes follow within the hardening tolerance (1e-4 of the thickness).
+        let gap = sim
+            .deformables
+            .prescribed
+            .max_violation_m(crate_.prescribed, &sim.nodes.x)
+            .unwrap();
+        assert!(gap <= 1e-7 * (1.0 + 1e-9), "{gap}");
+    }
+
+    #[test]
+    fn json_contact_entries_are_labelled() {
+        let json = r#"{
+  "duration_s": 1.0,
+  "settings": { "contact": { "default_thickness_m": 0.001 } },
+  "surface": [ { "name": "cloth", "grid": { "size_m": [1.0, 1.0], "quads": [2, 2] }, "material": "cotton_fabric" } ],
+  "obstacle": [ { "name": "ball", "sphere": { "radius_m": 0.1 }, "translate_m": [0.0, 0.0, -0.5] } ],
+  "friction": [ { "objects": ["cloth", "ball"], "mu": 0.2 } ]
+}"#;
+        let scene = parse_scene_with(json, "scene.json", Path::new("."), quiet).unwrap();
+        let c = &scene.simulation.contact;
+        assert_eq!(c.objects().len(), 2);
+        assert_eq!(c.friction(ContactHandle(0), ContactHandle(1)).unwrap(), 0.2);
+        assert_eq!(scene.simulation.nodes.len(), 9 + 162);
+        let bad = json.replace("[\"cloth\", \"ball\"]", "[\"cloth\", \"bal\"]");
+        let e = scene_error(parse_scene(&bad, "scene.json", Path::new(".")).err().unwrap());
+        assert!(
+            e.to_string()
+                .contains("unknown object 'bal' in friction #1 ('cloth' and 'bal') objects[1]"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn every_documented_scene_loads() {
+        let doc =
+            std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/scene-format.md")).unwrap();
+        let blocks: Vec<_> = doc
+            .split("```toml\n")
+            .skip(1)
+            .filter_map(|s| s.split("```").next())
+            .filter(|b| b.contains("duration_s"))
+            .collect();
+        assert!(blocks.len() >= 2, "{}", blocks.len());
+        for b in blocks {
+            parse_scene_with(b, "doc.toml", Path::new("."), quiet).unwrap_or_else(|e| panic!("{e}\n{b}"));
+        }
     }
 }
