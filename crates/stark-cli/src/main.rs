@@ -114,14 +114,22 @@ fn print_summary(s: &RunSummary, out: &std::path::Path) {
         s.wall_time_s, s.wall_time_per_simulated_s
     );
     let t = &s.times;
-    let total = (t.prepare_s + t.evaluation_s + t.linear_solve_s + t.line_search_s).max(1e-12);
+    let total = t.total_s().max(1e-12);
     println!(
-        "time per phase        evaluation {:.0}%, linear solve {:.0}%, line search {:.0}%, contact detection {:.0}%",
+        "time per phase        evaluation {:.0}%, linear solve {:.0}%, line search {:.0}%, contact detection {:.0}%, \
+         CCD {:.0}%",
         100.0 * t.evaluation_s / total,
         100.0 * t.linear_solve_s / total,
         100.0 * t.line_search_s / total,
-        100.0 * t.prepare_s / total
+        100.0 * t.prepare_s / total,
+        100.0 * t.ccd_s / total
     );
+    if s.max_active_pairs > 0 {
+        println!(
+            "contact               {:.0} active pairs on average, {} at most",
+            s.mean_active_pairs, s.max_active_pairs
+        );
+    }
     println!("output                {} frames in {}", s.frames, out.display());
 }
 
@@ -173,6 +181,8 @@ fn original_wall_s(scene: &str) -> Option<f64> {
     match scene {
         "hanging_cloth" => Some(6.5),
         "hanging_deformable_box" => Some(11.6),
+        "spinning_box_cloth" => Some(190.0),
+        "twisting_cloth" => Some(38.1),
         _ => None,
     }
 }
@@ -184,13 +194,29 @@ fn bench(scenes: Vec<String>, threads: Vec<usize>, json: Option<PathBuf>) -> sta
             "hanging_deformable_box".into(),
             "hanging_cloth_64".into(),
             "hanging_cloth_128".into(),
+            "spinning_box_cloth".into(),
+            "twisting_cloth".into(),
+            "twisting_cloth_64".into(),
         ]
     } else {
         scenes
     };
     println!(
-        "{:<26} {:>3} {:>6} {:>9} {:>11} {:>9} {:>8} {:>6} {:>6} {:>6} {:>10}",
-        "scene", "thr", "steps", "wall [s]", "s/sim. s", "Newton/st", "CG/Newt", "eval%", "solve%", "ls%", "original"
+        "{:<22} {:>3} {:>6} {:>9} {:>9} {:>9} {:>7} {:>6} {:>6} {:>5} {:>5} {:>6} {:>5} {:>9}",
+        "scene",
+        "thr",
+        "steps",
+        "wall [s]",
+        "s/sim. s",
+        "Newton/st",
+        "CG/Newt",
+        "pairs",
+        "detect%",
+        "ccd%",
+        "eval%",
+        "solve%",
+        "ls%",
+        "original"
     );
     let mut results = Vec::new();
     for name in &names {
@@ -202,12 +228,12 @@ fn bench(scenes: Vec<String>, threads: Vec<usize>, json: Option<PathBuf>) -> sta
             let mut sim = (scene.build)(settings)?;
             let s = sim.run(scene.duration_s)?;
             let tt = &s.times;
-            let total = (tt.prepare_s + tt.evaluation_s + tt.linear_solve_s + tt.line_search_s).max(1e-12);
+            let total = tt.total_s().max(1e-12);
             let original = original_wall_s(name)
                 .map(|w| format!("{w:.1} s"))
                 .unwrap_or_else(|| "-".into());
             println!(
-                "{:<26} {:>3} {:>6} {:>9.2} {:>11.3} {:>9.2} {:>8.1} {:>6.0} {:>6.0} {:>6.0} {:>10}",
+                "{:<22} {:>3} {:>6} {:>9.2} {:>9.3} {:>9.2} {:>7.1} {:>6.0} {:>7.0} {:>5.0} {:>5.0} {:>6.0} {:>5.0} {:>9}",
                 name,
                 t,
                 s.steps,
@@ -215,6 +241,9 @@ fn bench(scenes: Vec<String>, threads: Vec<usize>, json: Option<PathBuf>) -> sta
                 s.wall_time_per_simulated_s,
                 s.newton_iterations_per_step,
                 s.cg_iterations as f64 / s.newton_iterations.max(1) as f64,
+                s.mean_active_pairs,
+                100.0 * tt.prepare_s / total,
+                100.0 * tt.ccd_s / total,
                 100.0 * tt.evaluation_s / total,
                 100.0 * tt.linear_solve_s / total,
                 100.0 * tt.line_search_s / total,

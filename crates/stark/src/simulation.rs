@@ -94,6 +94,10 @@ pub struct RunSummary {
     pub frames: usize,
     /// Number of deformable nodes.
     pub nodes: usize,
+    /// Active contact pairs, averaged over the accepted steps.
+    pub mean_active_pairs: f64,
+    /// Most active contact pairs in an accepted step.
+    pub max_active_pairs: usize,
 }
 
 /// A simulation: nodes, energies, settings and the time loop.
@@ -486,6 +490,10 @@ impl Simulation {
             0.0
         };
         s.nodes = self.nodes.len();
+        if let Some(c) = &r.contact {
+            s.mean_active_pairs += (c.active_pairs as f64 - s.mean_active_pairs) / s.steps as f64;
+            s.max_active_pairs = s.max_active_pairs.max(c.active_pairs);
+        }
         self.output.log(r)?;
         let fps = self.settings.output.fps;
         if self.settings.output.frames && fps > 0.0 && !self.output.meshes.is_empty() {

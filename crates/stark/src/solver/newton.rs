@@ -35,8 +35,11 @@ pub struct PhaseTimes {
     pub evaluation_s: f64,
     /// Linear solves.
     pub linear_solve_s: f64,
-    /// Line search (CCD bounds and energy evaluations).
+    /// Line search energy evaluations (with the contact narrow phase at each trial state).
     pub line_search_s: f64,
+    /// Largest safe step fractions: continuous collision detection (and its broad phase when the
+    /// cached candidates no longer cover the step).
+    pub ccd_s: f64,
 }
 
 impl PhaseTimes {
@@ -46,6 +49,12 @@ impl PhaseTimes {
         self.evaluation_s += o.evaluation_s;
         self.linear_solve_s += o.linear_solve_s;
         self.line_search_s += o.line_search_s;
+        self.ccd_s += o.ccd_s;
+    }
+
+    /// Sum of all phases, s.
+    pub fn total_s(&self) -> f64 {
+        self.prepare_s + self.evaluation_s + self.linear_solve_s + self.line_search_s + self.ccd_s
     }
 }
 
@@ -191,7 +200,7 @@ pub fn solve(
         for (vi, v0) in v.iter_mut().zip(&problem.nodes.v) {
             *vi = v0 * alpha;
         }
-        report.times.line_search_s += t0.elapsed().as_secs_f64();
+        report.times.ccd_s += t0.elapsed().as_secs_f64();
     }
 
     let mut first_residual: Option<f64> = None;
@@ -283,7 +292,7 @@ pub fn solve(
             }
             break;
         }
-        let t3 = Instant::now();
+        let t_ccd = Instant::now();
 
         // Line search.
         axpy_velocities(v, &ws.step, 1.0, &mut ws.trial_v);
@@ -293,6 +302,8 @@ pub fn solve(
             let to = problem.state(&ws.trial_v, &ws.trial_x);
             max_step(terms, &from, &to)
         };
+        report.times.ccd_s += t_ccd.elapsed().as_secs_f64();
+        let t3 = Instant::now();
         report.min_step_fraction = report.min_step_fraction.min(alpha);
         if std::env::var_os("STARK_DEBUG_NEWTON").is_some() {
             let cur = problem.state(v, &ws.x);

@@ -214,6 +214,7 @@ impl Settings {
             self.output.fps,
             self.output.fps >= 0.0 && self.output.fps.is_finite(),
             "must be non-negative (0 disables frames)",
-        )
+        )?;
+        self.contact.validate()
     }
 }
