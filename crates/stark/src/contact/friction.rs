@@ -40,8 +40,9 @@ pub struct FrictionElement {
 }
 
 impl FrictionElement {
-    /// Build from the start-of-step positions: `normal` is the contact normal, the basis is any
-    /// orthonormal pair orthogonal to it.
+    /// Build from the start-of-step positions `x0` (the origin of the slip): `normal` is the
+    /// contact normal (taken from the lagged state, which a re-lag moves to the converged end of
+    /// the step), the basis is any orthonormal pair orthogonal to it.
     pub fn new(
         nodes: [u32; 4],
         len: usize,
@@ -184,5 +185,86 @@ mod tests {
                 assert!((g.norm() - 2.5).abs() < 1e-6, "{}", g.norm());
             }
         }
+    }
+
+    /// A re-lag (`friction_iterations` > 1) takes the normal force, tangents and weights from the
+    /// converged state but must keep measuring the slip from the start of the step: a point that
+    /// slid `s ≫ ε` over the step has the sliding energy `μλs` after the re-lag too. (Measuring
+    /// from the converged state gave `μλε/3`, the zero-slip value, so every extra friction
+    /// iteration let the next solve slide up to another `ε` further: a block sliding down an
+    /// incline gained +5% acceleration per extra iteration at ε_v = 1e-3 m/s, and a sticking one
+    /// crept that much faster; `tests/physics/incline_friction.rs`.)
+    #[test]
+    fn relag_keeps_the_start_of_step_as_slip_origin() {
+        use crate::contact::barrier::{barrier, BarrierKind};
+        use crate::contact::Contact;
+        use crate::deformables::NodeSetHandle;
+        use crate::energy::{EnergyTerm, StepCheck};
+        use crate::state::{EvalState, NodeArrays};
+        let (dt, mu, thickness, gap, slide) = (0.01, 0.5, 1e-3, 5e-4, 1e-3);
+        let mut nodes = NodeArrays::default();
+        nodes.push(&[
+            Vector3::new(-1.0, -1.0, 0.0),
+            Vector3::new(1.0, -1.0, 0.0),
+            Vector3::new(0.0, 1.0, 0.0),
+            Vector3::new(0.0, 0.0, gap),
+        ]);
+        let mut contact = Contact::default();
+        contact.settings.friction_iterations = 2;
+        contact.settings.friction_stick_slide_threshold_m_s = 1e-3;
+        let rest = nodes.rest.clone();
+        let floor = NodeSetHandle {
+            index: 0,
+            first: 0,
+            len: 3,
+        };
+        let point = NodeSetHandle {
+            index: 1,
+            first: 3,
+            len: 1,
+        };
+        let a = contact
+            .add_object(
+                "floor",
+                floor,
+                &rest,
+                &[[0, 1, 2]],
+                &[[0, 1], [1, 2], [0, 2]],
+                &[0, 1, 2],
+                thickness,
+            )
+            .unwrap();
+        let b = contact
+            .add_object("point", point, &rest, &[], &[], &[0], thickness)
+            .unwrap();
+        contact.set_friction(a, b, mu).unwrap();
+        contact.initialize_stiffness(&[1.0; 4], dt);
+        let zeros = vec![Vector3::zeros(); 4];
+        let mut x_end = nodes.x.clone();
+        x_end[3].x += slide;
+        let v_end: Vec<_> = nodes.x.iter().zip(&x_end).map(|(a, b)| (b - a) / dt).collect();
+        let at = |x, v| EvalState {
+            dt,
+            time: dt,
+            gravity: Vector3::zeros(),
+            nodes: &nodes,
+            v,
+            x,
+        };
+        contact.before_step(&at(&nodes.x, &zeros));
+        // No barrier pairs are prepared, so `energy` is the friction energy alone.
+        let lambda = contact.stiffness() * barrier(BarrierKind::Log, gap, 2.0 * thickness).1.abs();
+        let expected = mu * lambda * slide;
+        let first = contact.energy(&at(&x_end, &v_end));
+        assert!((first - expected).abs() < 1e-6 * expected, "{first} vs {expected}");
+        assert!(matches!(
+            contact.check_converged_step(&at(&x_end, &v_end)),
+            StepCheck::Retry(_)
+        ));
+        let relagged = contact.energy(&at(&x_end, &v_end));
+        assert!(
+            (relagged - expected).abs() < 1e-6 * expected,
+            "after the re-lag: {relagged} vs μλs = {expected}"
+        );
     }
 }

@@ -680,8 +680,10 @@ impl Contact {
         nodes.map(|i| if i == NO_DOF { Vector3::zeros() } else { x[i as usize] })
     }
 
-    /// Lagged friction elements from the pairs active at `x0`.
-    fn lag_friction(&mut self, pairs: &[ContactPair], x0: &[Vector3<f64>], dt: f64) {
+    /// Lagged friction elements from the pairs active at `x0`. The slip is measured from the
+    /// start-of-step positions `x_start` (equal to `x0` at the first lag; a re-lag takes normal
+    /// forces, tangents and weights from the converged state but must keep the slip origin).
+    fn lag_friction(&mut self, pairs: &[ContactPair], x0: &[Vector3<f64>], x_start: &[Vector3<f64>], dt: f64) {
         let eps = self.settings.friction_stick_slide_threshold_m_s * dt;
         let kappa = self.kappa;
         let kind = self.settings.barrier;
@@ -715,8 +717,10 @@ impl Contact {
                 let d = rel.norm();
                 let (_, db, _) = barrier(kind, d, p.dhat);
                 let lambda = kappa * p.multiplicity * db.abs();
-                (lambda > 0.0 && lambda.is_finite())
-                    .then(|| FrictionElement::new(p.nodes, p.kind.len(), weights, rel, &x, p.mu * lambda, eps))
+                (lambda > 0.0 && lambda.is_finite()).then(|| {
+                    let start = Self::stencil_x(&p.nodes, x_start);
+                    FrictionElement::new(p.nodes, p.kind.len(), weights, rel, &start, p.mu * lambda, eps)
+                })
             })
             .collect();
         self.stats.friction_pairs = self.friction_elements.len();
@@ -919,7 +923,7 @@ impl EnergyTerm for Contact {
         } else {
             self.lag_solves = 1;
             let pairs = self.detect(state.x);
-            self.lag_friction(&pairs, state.x, state.dt);
+            self.lag_friction(&pairs, state.x, state.x, state.dt);
         }
         // Objects, thicknesses or enabled pairs may have changed since the last step.
         *self.candidate_cache.get_mut().expect("no poisoned lock") = None;
@@ -958,7 +962,7 @@ impl EnergyTerm for Contact {
     fn check_converged_step(&mut self, state: &EvalState) -> StepCheck {
         if self.lag_solves < self.settings.friction_iterations && self.friction.iter().any(|&m| m > 0.0) {
             let pairs = self.detect(state.x);
-            self.lag_friction(&pairs, state.x, state.dt);
+            self.lag_friction(&pairs, state.x, &state.nodes.x, state.dt);
             self.lag_solves += 1;
             self.relag_pending = true;
             return StepCheck::Retry(format!(
