@@ -252,6 +252,9 @@ fn twisting_cloth_n(mut settings: Settings, n: usize, name: &str) -> Result<Simu
     settings.gravity_m_s2 = [0.0; 3];
     stark_tolerances(&mut settings);
     settings.contact.default_thickness_m = Some(0.001);
+    // Thousands of light self-contact pairs: the Gauss–Newton barrier Hessian needs as many
+    // Newton iterations here as the projected one (4.9 vs 5.2 per step) at a third of the cost.
+    settings.contact.hessian = crate::contact::PairHessian::GaussNewton;
     let mut sim = Simulation::new(settings)?;
     let mut cotton = SurfaceMaterial::cotton_fabric();
     cotton.strain.damping = 0.0;
