@@ -305,14 +305,6 @@ pub fn solve(
         report.times.ccd_s += t_ccd.elapsed().as_secs_f64();
         let t3 = Instant::now();
         report.min_step_fraction = report.min_step_fraction.min(alpha);
-        if std::env::var_os("STARK_DEBUG_NEWTON").is_some() {
-            let cur = problem.state(v, &ws.x);
-            let per: Vec<String> = terms
-                .iter()
-                .map(|t| format!("{}={:.9e}", t.name(), t.energy(&cur)))
-                .collect();
-            eprintln!("  current (assembled {energy:.9e}) {}", per.join(" "));
-        }
         // Below this the energy difference is rounding noise.
         let noise = 1e-13 * energy_scale;
         let mut accepted = false;
@@ -328,19 +320,6 @@ pub fn solve(
             let trial = problem.state(&ws.trial_v, &ws.trial_x);
             let e = total_energy(terms, &trial);
             report.line_search_evaluations += 1;
-            if std::env::var_os("STARK_DEBUG_NEWTON").is_some() {
-                let per: Vec<String> = terms
-                    .iter()
-                    .map(|t| format!("{}={:.9e}", t.name(), t.energy(&trial)))
-                    .collect();
-                eprintln!("    trial {}", per.join(" "));
-                eprintln!(
-                    "  it {iteration} alpha {alpha:.3e} e-e0 {:.6e} armijo {:.6e} noise {:.3e} residual {residual:.3e}",
-                    e - energy,
-                    settings.armijo * alpha * descent,
-                    noise
-                );
-            }
             if e.is_finite() && e <= energy + settings.armijo * alpha * descent + noise {
                 accepted = true;
                 break;
