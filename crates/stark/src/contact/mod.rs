@@ -29,7 +29,7 @@ use barrier::barrier;
 use friction::FrictionElement;
 use nalgebra::Vector3;
 pub use pairs::PairHessian;
-use pairs::{pair_derivatives, pair_energy, ContactPair, EdgeEdgeRegion, PairKind};
+use pairs::{pair_derivatives, pair_energy, ContactPair, PairKind};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -550,18 +550,22 @@ impl Contact {
         found
     }
 
-    /// Active pairs at positions `x` (a fresh broad phase).
-    fn detect(&self, x: &[Vector3<f64>]) -> Vec<ContactPair> {
-        self.narrow_phase(&self.candidates(x, x, 0.0), x)
+    /// Active pairs at positions `x`, from the cached candidates when they cover `x` (else a new
+    /// broad phase, then cached).
+    fn detect(&mut self, x: &[Vector3<f64>]) -> Vec<ContactPair> {
+        let cached = self.candidate_cache.get_mut().expect("no poisoned lock").take();
+        let candidates = self.candidates_for(cached, x, x);
+        let pairs = self.narrow_phase(&candidates, x);
+        *self.candidate_cache.get_mut().expect("no poisoned lock") = Some(candidates);
+        pairs
     }
 
+    /// The pair of a point–triangle candidate at `x`, if within `d̂` (candidates are already
+    /// enabled and not adjacent).
     fn point_triangle_pair(&self, pi: usize, ti: usize, x: &[Vector3<f64>]) -> Option<ContactPair> {
         let (po, to) = (self.point_obj[pi], self.tri_obj[ti]);
         let p = self.points[pi];
         let t = self.triangles[ti];
-        if !self.pair_ok(po, to) || t.contains(&p) {
-            return None;
-        }
         let (xp, x0, x1, x2) = (&x[p as usize], &x[t[0] as usize], &x[t[1] as usize], &x[t[2] as usize]);
         let dhat = self.dhat(po, to);
         // Cheap rejection: the point is farther than d̂ from the triangle's box on some axis.
@@ -604,12 +608,11 @@ impl Contact {
         })
     }
 
+    /// The pair of an edge–edge candidate at `x`, if within `d̂` (candidates are already enabled
+    /// and share no vertex).
     fn edge_edge_pair(&self, a: usize, b: usize, x: &[Vector3<f64>]) -> Option<ContactPair> {
         let (oa, ob) = (self.edge_obj[a], self.edge_obj[b]);
         let (ea, eb) = (self.edges[a], self.edges[b]);
-        if !self.pair_ok(oa, ob) || ea.iter().any(|v| eb.contains(v)) {
-            return None;
-        }
         let p = |i: u32| &x[i as usize];
         let (a0, a1, b0, b1) = (p(ea[0]), p(ea[1]), p(eb[0]), p(eb[1]));
         let dhat = self.dhat(oa, ob);
@@ -625,7 +628,7 @@ impl Contact {
         let eps_x = 1e-3 * self.edge_rest_len_sq[a] * self.edge_rest_len_sq[b];
         if edge_edge_cross_norm_sq(a0, a1, b0, b1) < eps_x {
             return Some(ContactPair {
-                kind: PairKind::EdgeEdgeMollified(EdgeEdgeRegion::from(ty)),
+                kind: PairKind::EdgeEdgeMollified(ty),
                 nodes: [ea[0], ea[1], eb[0], eb[1]],
                 dhat,
                 eps_x,
@@ -706,7 +709,7 @@ impl Contact {
                     }
                     PairKind::EdgeEdge | PairKind::EdgeEdgeMollified(_) => {
                         let ty = match p.kind {
-                            PairKind::EdgeEdgeMollified(r) => region_to_type(r),
+                            PairKind::EdgeEdgeMollified(r) => r,
                             _ => Ee::EaEb,
                         };
                         let (a, b) = edge_edge_closest_parameters_typed(&x[0], &x[1], &x[2], &x[3], ty);
@@ -817,21 +820,6 @@ impl Candidates {
     }
 }
 
-fn region_to_type(r: EdgeEdgeRegion) -> Ee {
-    use EdgeEdgeRegion as R;
-    match r {
-        R::Ea0Eb0 => Ee::Ea0Eb0,
-        R::Ea0Eb1 => Ee::Ea0Eb1,
-        R::Ea1Eb0 => Ee::Ea1Eb0,
-        R::Ea1Eb1 => Ee::Ea1Eb1,
-        R::EaEb0 => Ee::EaEb0,
-        R::EaEb1 => Ee::EaEb1,
-        R::Ea0Eb => Ee::Ea0Eb,
-        R::Ea1Eb => Ee::Ea1Eb,
-        R::EaEb => Ee::EaEb,
-    }
-}
-
 /// Write node-space derivatives of a 4-node stencil in the deformable DOF layout (`∂x/∂v = dt·I`).
 fn write_dofs(d: &HyperDual<4>, dt: f64, out: &mut [f64]) {
     out[0] = d.value;
@@ -918,6 +906,8 @@ impl EnergyTerm for Contact {
         write_dofs(&d, state.dt, out);
     }
     fn before_step(&mut self, state: &EvalState) {
+        // Objects, thicknesses or enabled pairs may have changed since the last step.
+        *self.candidate_cache.get_mut().expect("no poisoned lock") = None;
         if self.relag_pending {
             self.relag_pending = false;
         } else {
@@ -925,15 +915,10 @@ impl EnergyTerm for Contact {
             let pairs = self.detect(state.x);
             self.lag_friction(&pairs, state.x, state.x, state.dt);
         }
-        // Objects, thicknesses or enabled pairs may have changed since the last step.
-        *self.candidate_cache.get_mut().expect("no poisoned lock") = None;
         self.version += 1;
     }
     fn prepare_evaluation(&mut self, state: &EvalState) {
-        let cached = self.candidate_cache.get_mut().expect("no poisoned lock").take();
-        let candidates = self.candidates_for(cached, state.x, state.x);
-        let pairs = self.narrow_phase(&candidates, state.x);
-        *self.candidate_cache.get_mut().expect("no poisoned lock") = Some(candidates);
+        let pairs = self.detect(state.x);
         if pairs
             .iter()
             .map(|p| (p.kind, p.nodes))

@@ -34,46 +34,7 @@ pub enum PairKind {
     EdgeEdge,
     /// Nodes `[ea0, ea1, eb0, eb1]` of nearly parallel edges, with the region of their closest
     /// points; mollified.
-    EdgeEdgeMollified(EdgeEdgeRegion),
-}
-
-/// Region of an edge–edge pair (a copy of [`Ee`] that is `Ord`, for sorting pairs).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub enum EdgeEdgeRegion {
-    /// `ea0`–`eb0`.
-    Ea0Eb0,
-    /// `ea0`–`eb1`.
-    Ea0Eb1,
-    /// `ea1`–`eb0`.
-    Ea1Eb0,
-    /// `ea1`–`eb1`.
-    Ea1Eb1,
-    /// Edge a – `eb0`.
-    EaEb0,
-    /// Edge a – `eb1`.
-    EaEb1,
-    /// `ea0` – edge b.
-    Ea0Eb,
-    /// `ea1` – edge b.
-    Ea1Eb,
-    /// Edge a – edge b.
-    EaEb,
-}
-
-impl From<Ee> for EdgeEdgeRegion {
-    fn from(t: Ee) -> Self {
-        match t {
-            Ee::Ea0Eb0 => Self::Ea0Eb0,
-            Ee::Ea0Eb1 => Self::Ea0Eb1,
-            Ee::Ea1Eb0 => Self::Ea1Eb0,
-            Ee::Ea1Eb1 => Self::Ea1Eb1,
-            Ee::EaEb0 => Self::EaEb0,
-            Ee::EaEb1 => Self::EaEb1,
-            Ee::Ea0Eb => Self::Ea0Eb,
-            Ee::Ea1Eb => Self::Ea1Eb,
-            Ee::EaEb => Self::EaEb,
-        }
-    }
+    EdgeEdgeMollified(Ee),
 }
 
 /// The basic distance formulas.
@@ -114,7 +75,7 @@ impl PairKind {
 
     /// The distance formula and which stencil nodes it uses, in its order.
     pub fn distance(self) -> (Distance, [usize; 4]) {
-        use EdgeEdgeRegion as R;
+        use Ee as R;
         match self {
             PairKind::PointPoint => (Distance::PointPoint, [0, 1, 0, 0]),
             PairKind::PointEdge => (Distance::PointLine, [0, 1, 2, 0]),
@@ -420,7 +381,7 @@ mod tests {
 
     #[test]
     fn derivatives_of_every_pair_kind_match_the_oracle() {
-        use EdgeEdgeRegion as R;
+        use Ee as R;
         let mut rng = rand::rngs::StdRng::seed_from_u64(7);
         let kinds = [
             PairKind::PointPoint,

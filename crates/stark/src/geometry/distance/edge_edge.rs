@@ -27,8 +27,9 @@ use super::point_point::point_point_distance_sq;
 /// which are exact and differ from the line–line distance only where the two agree anyway.
 pub const EDGE_EDGE_PARALLEL_THRESHOLD: f64 = 2.5e-16;
 
-/// Region of the closest points of two edges (IPC `EdgeEdgeDistanceType`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+/// Region of the closest points of two edges (IPC `EdgeEdgeDistanceType`). Ordered, so contact
+/// pairs keyed by it can be sorted.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum EdgeEdgeDistanceType {
     /// Vertex `ea0` and vertex `eb0` (IPC `EA0_EB0`).
     Ea0Eb0,
