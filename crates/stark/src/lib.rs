@@ -12,6 +12,7 @@ pub mod generated;
 pub mod geometry;
 pub mod io;
 pub mod presets;
+pub mod rigidbodies;
 pub mod scenes;
 pub mod simulation;
 pub mod solver;

@@ -2,12 +2,14 @@
 
 use crate::contact::{Contact, ContactStats};
 use crate::deformables::{Deformables, NodeSetHandle};
+use crate::energy::kinematics::BodyPose;
 use crate::energy::{EnergyTerm, StepCheck};
 use crate::error::{Result, StarkError};
 use crate::io::output::Output;
+use crate::rigidbodies::{commit_bodies, RigidBodies};
 use crate::solver::newton::{self, ConvergedBy, NewtonWorkspace, PhaseTimes, StepProblem};
 use crate::solver::Settings;
-use crate::state::{positions_from_velocities, EvalState, NodeArrays};
+use crate::state::{apply_kinematic_map, dof_blocks, BodyArrays, EvalState, NodeArrays, NO_BODY};
 use nalgebra::Vector3;
 use serde::Serialize;
 use std::time::Instant;
@@ -108,6 +110,10 @@ pub struct Simulation {
     pub nodes: NodeArrays,
     /// Deformable energy models.
     pub deformables: Deformables,
+    /// All rigid bodies (start-of-step state).
+    pub bodies: BodyArrays,
+    /// Rigid-body models: inertia and joints.
+    pub rigid_bodies: RigidBodies,
     /// Contact objects, barrier, CCD and friction.
     pub contact: Contact,
     /// Frames and logs.
@@ -119,6 +125,7 @@ pub struct Simulation {
     newton: NewtonWorkspace,
     velocities: Vec<Vector3<f64>>,
     scratch_x: Vec<Vector3<f64>>,
+    scratch_poses: Vec<BodyPose>,
     pool: Option<rayon::ThreadPool>,
     summary: RunSummary,
     started: bool,
@@ -147,6 +154,8 @@ impl Simulation {
             settings,
             nodes: NodeArrays::default(),
             deformables: Deformables::default(),
+            bodies: BodyArrays::default(),
+            rigid_bodies: RigidBodies::default(),
             contact: Contact::default(),
             output: Output::default(),
             custom: Vec::new(),
@@ -156,6 +165,7 @@ impl Simulation {
             newton: NewtonWorkspace::default(),
             velocities: Vec::new(),
             scratch_x: Vec::new(),
+            scratch_poses: Vec::new(),
             pool,
             started: false,
         })
@@ -256,6 +266,7 @@ impl Simulation {
 
     fn terms_mut(&mut self) -> Vec<&mut dyn EnergyTerm> {
         let mut terms = self.deformables.terms_mut();
+        terms.extend(self.rigid_bodies.terms_mut());
         terms.push(&mut self.contact);
         terms.extend(self.custom.iter_mut().map(|t| &mut **t as &mut dyn EnergyTerm));
         terms
@@ -319,7 +330,8 @@ impl Simulation {
             let t_end = self.time + dt;
             self.run_events(t_end)?;
             self.contact.settings = self.settings.contact.clone();
-            let masses = self.deformables.inertia.node_masses(self.nodes.len());
+            let mut masses = self.deformables.inertia.node_masses(self.nodes.len());
+            RigidBodies::add_node_masses(&self.nodes, &self.bodies, &mut masses);
             self.contact.initialize_stiffness(&masses, self.settings.time_step_s);
             let gravity = self.gravity();
             let newton_settings = self.settings.newton.clone();
@@ -327,9 +339,11 @@ impl Simulation {
             let mut newton_ws = std::mem::take(&mut self.newton);
             let pool = self.pool.take();
             let nodes = std::mem::take(&mut self.nodes);
+            let bodies = std::mem::take(&mut self.bodies);
             let result = {
                 let problem = StepProblem {
                     nodes: &nodes,
+                    bodies: &bodies,
                     dt,
                     time: t_end,
                     gravity,
@@ -337,7 +351,10 @@ impl Simulation {
                 let mut terms = self.terms_mut();
                 // Lagged quantities are taken at the start of the step (v = 0, x = x0).
                 {
-                    let zeros = vec![Vector3::zeros(); nodes.len()];
+                    let zeros = vec![Vector3::zeros(); dof_blocks(&nodes, &bodies)];
+                    let rest_poses: Vec<BodyPose> = (0..bodies.len())
+                        .map(|b| BodyPose::at_rest(bodies.position[b], &bodies.orientation[b], dt))
+                        .collect();
                     let state = EvalState {
                         dt,
                         time: t_end,
@@ -345,6 +362,8 @@ impl Simulation {
                         nodes: &nodes,
                         v: &zeros,
                         x: &nodes.x,
+                        bodies: &bodies,
+                        poses: &rest_poses,
                     };
                     for t in terms.iter_mut() {
                         t.before_step(&state);
@@ -358,17 +377,27 @@ impl Simulation {
                 }
             };
             self.nodes = nodes;
+            self.bodies = bodies;
             self.pool = pool;
             self.newton = newton_ws;
             match result {
                 Ok(report) => {
                     times.add(&report.times);
                     total_newton += report.iterations;
-                    positions_from_velocities(&self.nodes, &velocities, dt, &mut self.scratch_x);
+                    apply_kinematic_map(
+                        &self.nodes,
+                        &self.bodies,
+                        &velocities,
+                        dt,
+                        &mut self.scratch_x,
+                        &mut self.scratch_poses,
+                    );
                     let mut retry = Vec::new();
                     {
                         let nodes = std::mem::take(&mut self.nodes);
+                        let bodies = std::mem::take(&mut self.bodies);
                         let x = std::mem::take(&mut self.scratch_x);
+                        let poses = std::mem::take(&mut self.scratch_poses);
                         {
                             let state = EvalState {
                                 dt,
@@ -377,6 +406,8 @@ impl Simulation {
                                 nodes: &nodes,
                                 v: &velocities,
                                 x: &x,
+                                bodies: &bodies,
+                                poses: &poses,
                             };
                             for t in self.terms_mut() {
                                 if let StepCheck::Retry(msg) = t.check_converged_step(&state) {
@@ -385,7 +416,9 @@ impl Simulation {
                             }
                         }
                         self.nodes = nodes;
+                        self.bodies = bodies;
                         self.scratch_x = x;
+                        self.scratch_poses = poses;
                     }
                     if !retry.is_empty() {
                         hardening_retries += 1;
@@ -406,26 +439,42 @@ impl Simulation {
                     }
                     // Commit.
                     std::mem::swap(&mut self.nodes.x, &mut self.scratch_x);
-                    self.nodes.v.copy_from_slice(&velocities);
-                    self.velocities = velocities;
+                    let n_nodes = self.nodes.len();
+                    for i in 0..n_nodes {
+                        self.nodes.v[i] = if self.nodes.body[i] == NO_BODY {
+                            velocities[i]
+                        } else {
+                            // A rigid node's velocity, for output.
+                            (self.nodes.x[i] - self.scratch_x[i]) / dt
+                        };
+                    }
+                    commit_bodies(&mut self.bodies, &velocities, n_nodes, dt);
                     self.time = t_end;
                     {
                         let nodes = std::mem::take(&mut self.nodes);
+                        let bodies = std::mem::take(&mut self.bodies);
                         {
+                            let poses: Vec<BodyPose> = (0..bodies.len())
+                                .map(|b| BodyPose::at_rest(bodies.position[b], &bodies.orientation[b], dt))
+                                .collect();
                             let state = EvalState {
                                 dt,
                                 time: t_end,
                                 gravity,
                                 nodes: &nodes,
-                                v: &nodes.v,
+                                v: &velocities,
                                 x: &nodes.x,
+                                bodies: &bodies,
+                                poses: &poses,
                             };
                             for t in self.terms_mut() {
                                 t.after_step(&state);
                             }
                         }
                         self.nodes = nodes;
+                        self.bodies = bodies;
                     }
+                    self.velocities = velocities;
                     if self.settings.adaptive_time_step {
                         self.dt = (dt * self.settings.time_step_growth).min(self.settings.time_step_s);
                     }

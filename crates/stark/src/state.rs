@@ -1,7 +1,11 @@
 //! Simulation state: the flat node arrays of all deformables and the view of one Newton iterate
 //! that energies evaluate.
 
-use nalgebra::Vector3;
+use crate::energy::kinematics::BodyPose;
+use nalgebra::{Matrix3, UnitQuaternion, Vector3};
+
+/// `NodeArrays::body` of a deformable node: it is not attached to a rigid body.
+pub const NO_BODY: u32 = u32::MAX;
 
 /// All deformable nodes of a simulation in one flat set of arrays (segmented per object by
 /// [`NodeSetHandle`](crate::deformables::NodeSetHandle)).
@@ -17,6 +21,11 @@ pub struct NodeArrays {
     pub force: Vec<Vector3<f64>>,
     /// External acceleration per node (added to gravity), m/s². Persists until changed.
     pub acceleration: Vec<Vector3<f64>>,
+    /// The rigid body a node belongs to ([`NO_BODY`] for deformable nodes). A rigid node is a
+    /// vertex of a body's collision mesh: its `rest` is its body-local position and its position
+    /// follows the body (its own DOF block is unused and pinned at zero).
+    #[serde(default)]
+    pub body: Vec<u32>,
 }
 
 impl NodeArrays {
@@ -31,6 +40,7 @@ impl NodeArrays {
     /// Append nodes at rest at `positions`; returns the index of the first.
     pub fn push(&mut self, positions: &[Vector3<f64>]) -> usize {
         let first = self.x.len();
+        self.body.resize(first + positions.len(), NO_BODY);
         self.rest.extend_from_slice(positions);
         self.x.extend_from_slice(positions);
         self.v.extend(std::iter::repeat_n(Vector3::zeros(), positions.len()));
@@ -40,6 +50,67 @@ impl NodeArrays {
             .extend(std::iter::repeat_n(Vector3::zeros(), positions.len()));
         first
     }
+}
+
+/// Start-of-step state of all rigid bodies, one entry per body in each array.
+///
+/// A body's frame has its origin at the centre of mass; its collision-mesh vertices and joint
+/// anchors are stored in that frame.
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
+pub struct BodyArrays {
+    /// Centre of mass, m.
+    pub position: Vec<Vector3<f64>>,
+    /// Orientation (body → world).
+    pub orientation: Vec<UnitQuaternion<f64>>,
+    /// Linear velocity of the centre of mass, m/s.
+    pub velocity: Vec<Vector3<f64>>,
+    /// Angular velocity (world frame), rad/s.
+    pub angular_velocity: Vec<Vector3<f64>>,
+    /// Mass, kg.
+    pub mass: Vec<f64>,
+    /// Inertia tensor about the centre of mass in the body frame, kg·m².
+    pub inertia_local: Vec<Matrix3<f64>>,
+    /// External force at the centre of mass (world), N. Persists until changed.
+    pub force: Vec<Vector3<f64>>,
+    /// External torque (world), N·m. Persists until changed.
+    pub torque: Vec<Vector3<f64>>,
+    /// External acceleration (added to gravity), m/s². Persists until changed.
+    pub acceleration: Vec<Vector3<f64>>,
+    /// External angular acceleration, rad/s². Persists until changed.
+    pub angular_acceleration: Vec<Vector3<f64>>,
+}
+
+impl BodyArrays {
+    /// Number of bodies.
+    pub fn len(&self) -> usize {
+        self.position.len()
+    }
+    /// No bodies.
+    pub fn is_empty(&self) -> bool {
+        self.position.is_empty()
+    }
+    /// Rotation matrix of body `b` at the start of the step.
+    pub fn rotation(&self, b: usize) -> Matrix3<f64> {
+        self.orientation[b].to_rotation_matrix().into_inner()
+    }
+    /// World inertia tensor `R J Rᵀ` of body `b` at the start of the step, kg·m².
+    pub fn inertia_world(&self, b: usize) -> Matrix3<f64> {
+        let r = self.rotation(b);
+        r * self.inertia_local[b] * r.transpose()
+    }
+}
+
+/// DOF block of the linear velocity of body `b` when there are `n_nodes` nodes. DOF blocks are
+/// the node blocks followed by two blocks (linear, angular) per body.
+#[inline]
+pub fn linear_block(n_nodes: usize, b: usize) -> u32 {
+    (n_nodes + 2 * b) as u32
+}
+
+/// DOF block of the angular velocity of body `b` (see [`linear_block`]).
+#[inline]
+pub fn angular_block(n_nodes: usize, b: usize) -> u32 {
+    (n_nodes + 2 * b + 1) as u32
 }
 
 /// The state at one Newton iterate: start-of-step state plus the trial end-of-step velocities.
@@ -55,10 +126,15 @@ pub struct EvalState<'a> {
     pub gravity: Vector3<f64>,
     /// Start-of-step node state.
     pub nodes: &'a NodeArrays,
-    /// Trial end-of-step node velocities `v`, m/s.
+    /// Trial end-of-step DOF velocities: one block per node (m/s; zero for rigid nodes), then
+    /// linear (m/s) and angular (rad/s) velocity per body.
     pub v: &'a [Vector3<f64>],
-    /// Trial end-of-step node positions `x0 + dt·v`, m.
+    /// Trial end-of-step node positions (`x0 + dt·v`, or on their body), m.
     pub x: &'a [Vector3<f64>],
+    /// Start-of-step rigid bodies.
+    pub bodies: &'a BodyArrays,
+    /// Trial end-of-step pose of each body.
+    pub poses: &'a [BodyPose],
 }
 
 impl EvalState<'_> {
@@ -69,11 +145,82 @@ impl EvalState<'_> {
     }
 }
 
-/// Positions `x0 + dt·v` for all nodes.
+impl EvalState<'_> {
+    /// Number of nodes (the first DOF blocks).
+    #[inline]
+    pub fn n_nodes(&self) -> usize {
+        self.nodes.len()
+    }
+    /// Trial linear velocity of body `b`, m/s.
+    #[inline]
+    pub fn body_velocity(&self, b: usize) -> Vector3<f64> {
+        self.v[linear_block(self.n_nodes(), b) as usize]
+    }
+    /// Trial angular velocity of body `b`, rad/s.
+    #[inline]
+    pub fn body_angular_velocity(&self, b: usize) -> Vector3<f64> {
+        self.v[angular_block(self.n_nodes(), b) as usize]
+    }
+}
+
+/// Positions `x0 + dt·v` for all deformable nodes (only; rigid nodes are placed by
+/// [`apply_kinematic_map`]).
 pub fn positions_from_velocities(nodes: &NodeArrays, v: &[Vector3<f64>], dt: f64, out: &mut Vec<Vector3<f64>>) {
     use rayon::prelude::*;
-    out.resize(v.len(), Vector3::zeros());
+    out.resize(nodes.len(), Vector3::zeros());
     out.par_iter_mut()
-        .zip(nodes.x.par_iter().zip(v.par_iter()))
+        .zip(nodes.x.par_iter().zip(v[..nodes.len()].par_iter()))
         .for_each(|(x, (x0, v))| *x = x0 + v * dt);
+}
+
+/// The kinematic map (DESIGN §2): body poses and all node positions from the DOF velocities `v`.
+pub fn apply_kinematic_map(
+    nodes: &NodeArrays,
+    bodies: &BodyArrays,
+    v: &[Vector3<f64>],
+    dt: f64,
+    x: &mut Vec<Vector3<f64>>,
+    poses: &mut Vec<BodyPose>,
+) {
+    let n = nodes.len();
+    poses.clear();
+    poses.extend((0..bodies.len()).map(|b| {
+        BodyPose::new(
+            bodies.position[b],
+            &bodies.orientation[b],
+            &v[linear_block(n, b) as usize],
+            &v[angular_block(n, b) as usize],
+            dt,
+        )
+    }));
+    positions_from_velocities(nodes, v, dt, x);
+    if !bodies.is_empty() {
+        for (i, &b) in nodes.body.iter().enumerate() {
+            if b != NO_BODY {
+                x[i] = poses[b as usize].point(&nodes.rest[i]);
+            }
+        }
+    }
+}
+
+/// The start-of-step DOF velocities: node velocities (zero for rigid nodes), then per body its
+/// linear and angular velocity.
+pub fn start_velocities(nodes: &NodeArrays, bodies: &BodyArrays, out: &mut Vec<Vector3<f64>>) {
+    out.clear();
+    out.extend(
+        nodes
+            .v
+            .iter()
+            .zip(&nodes.body)
+            .map(|(v, &b)| if b == NO_BODY { *v } else { Vector3::zeros() }),
+    );
+    for b in 0..bodies.len() {
+        out.push(bodies.velocity[b]);
+        out.push(bodies.angular_velocity[b]);
+    }
+}
+
+/// Number of DOF blocks of a state: one per node, two per body.
+pub fn dof_blocks(nodes: &NodeArrays, bodies: &BodyArrays) -> usize {
+    nodes.len() + 2 * bodies.len()
 }

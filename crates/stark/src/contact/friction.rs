@@ -243,6 +243,7 @@ mod tests {
         let mut x_end = nodes.x.clone();
         x_end[3].x += slide;
         let v_end: Vec<_> = nodes.x.iter().zip(&x_end).map(|(a, b)| (b - a) / dt).collect();
+        let bodies = crate::state::BodyArrays::default();
         let at = |x, v| EvalState {
             dt,
             time: dt,
@@ -250,6 +251,8 @@ mod tests {
             nodes: &nodes,
             v,
             x,
+            bodies: &bodies,
+            poses: &[],
         };
         contact.before_step(&at(&nodes.x, &zeros));
         // No barrier pairs are prepared, so `energy` is the friction energy alone.

@@ -12,7 +12,9 @@ pub mod pairs;
 pub use barrier::BarrierKind;
 
 use crate::deformables::NodeSetHandle;
+use crate::energy::kinematics::{element_blocks, map_element, NodeMap};
 use crate::energy::term::{element_stride, NO_DOF};
+use crate::energy::Node;
 use crate::energy::{EnergyTerm, EvalMode, HyperDual, Scalar, StepCheck, Vec3};
 use crate::error::{check_param, Result, StarkError};
 use crate::geometry::aabb::{edge_swept_aabb, point_swept_aabb, triangle_swept_aabb, Aabb};
@@ -24,7 +26,7 @@ use crate::geometry::distance::{
     point_triangle_distance_type, EdgeEdgeDistanceType as Ee, PointEdgeDistanceType, PointTriangleDistanceType as Pt,
 };
 use crate::geometry::intersection::find_edge_triangle_intersections;
-use crate::state::EvalState;
+use crate::state::{EvalState, NO_BODY};
 use barrier::barrier;
 use friction::FrictionElement;
 use nalgebra::Vector3;
@@ -820,6 +822,17 @@ impl Candidates {
     }
 }
 
+/// How the nodes of a pair (padded with `NO_DOF`) depend on the DOFs.
+fn node_maps<'s>(nodes: &[u32; 4], state: &'s EvalState) -> [NodeMap<'s>; 4] {
+    nodes.map(|i| {
+        if i == NO_DOF {
+            NodeMap::Fixed
+        } else {
+            Node::Point(i).map(state)
+        }
+    })
+}
+
 /// Write node-space derivatives of a 4-node stencil in the deformable DOF layout (`∂x/∂v = dt·I`).
 fn write_dofs(d: &HyperDual<4>, dt: f64, out: &mut [f64]) {
     out[0] = d.value;
@@ -840,6 +853,17 @@ fn write_dofs(d: &HyperDual<4>, dt: f64, out: &mut [f64]) {
     }
 }
 
+impl Contact {
+    /// Whether any contact object is a rigid body's mesh.
+    fn has_rigid_objects(&self, state: &EvalState) -> bool {
+        !state.bodies.is_empty()
+            && self
+                .objects
+                .iter()
+                .any(|o| state.nodes.body[o.nodes.first as usize] != NO_BODY)
+    }
+}
+
 impl EnergyTerm for Contact {
     fn name(&self) -> &str {
         "contact"
@@ -847,17 +871,27 @@ impl EnergyTerm for Contact {
     fn num_elements(&self) -> usize {
         self.pairs.len() + self.friction_elements.len()
     }
-    fn stencil_width(&self) -> usize {
-        4
+    fn stencil_width(&self, state: &EvalState) -> usize {
+        // A point of a rigid body against a deformable triangle couples 2 + 3 blocks.
+        if self.has_rigid_objects(state) {
+            5
+        } else {
+            4
+        }
     }
-    fn write_stencils(&self, _state: &EvalState, out: &mut [u32]) {
+    fn write_stencils(&self, state: &EvalState, out: &mut [u32]) {
         let all = self
             .pairs
             .iter()
             .map(|p| p.nodes)
             .chain(self.friction_elements.iter().map(|f| f.nodes));
-        for (o, nodes) in out.chunks_exact_mut(4).zip(all) {
-            o.copy_from_slice(&nodes);
+        let w = self.stencil_width(state);
+        for (o, nodes) in out.chunks_exact_mut(w).zip(all) {
+            if w == 4 {
+                o.copy_from_slice(&nodes);
+            } else {
+                element_blocks(&node_maps(&nodes, state), o);
+            }
         }
     }
     fn topology_version(&self) -> u64 {
@@ -886,7 +920,6 @@ impl EnergyTerm for Contact {
         barrier_energy + friction_energy
     }
     fn evaluate_element(&self, e: usize, state: &EvalState, _mode: EvalMode, out: &mut [f64]) {
-        debug_assert_eq!(out.len(), element_stride(4));
         let mut d = HyperDual::<4>::constant(0.0);
         if e < self.pairs.len() {
             let p = &self.pairs[e];
@@ -903,7 +936,19 @@ impl EnergyTerm for Contact {
             let f = &self.friction_elements[e - self.pairs.len()];
             f.derivatives(&Self::stencil_x(&f.nodes, state.x), &mut d);
         }
-        write_dofs(&d, state.dt, out);
+        if out.len() == element_stride(4) {
+            write_dofs(&d, state.dt, out);
+        } else {
+            let nodes = if e < self.pairs.len() {
+                self.pairs[e].nodes
+            } else {
+                self.friction_elements[e - self.pairs.len()].nodes
+            };
+            // Through the kinematic map; the position-space Hessian is already positive
+            // semi-definite, the rotation's second-order term may not be.
+            let project = self.settings.hessian != PairHessian::Exact;
+            map_element(&node_maps(&nodes, state), &d, state.dt, 5, project, out);
+        }
     }
     fn before_step(&mut self, state: &EvalState) {
         // Objects, thicknesses or enabled pairs may have changed since the last step.

@@ -88,7 +88,7 @@ impl Assembler {
         let key: LayoutKey = (
             terms
                 .iter()
-                .map(|t| (t.topology_version(), t.num_elements(), t.stencil_width()))
+                .map(|t| (t.topology_version(), t.num_elements(), t.stencil_width(state)))
                 .collect(),
             n_blocks,
         );
@@ -99,7 +99,7 @@ impl Assembler {
         let mut pairs: Vec<(u32, u32)> = (0..n_blocks as u32).map(|b| (b, b)).collect();
         self.layouts.clear();
         for t in terms {
-            let m = t.stencil_width();
+            let m = t.stencil_width(state);
             let mut stencils = vec![NO_DOF; t.num_elements() * m];
             t.write_stencils(state, &mut stencils);
             for st in stencils.chunks_exact(m.max(1)) {

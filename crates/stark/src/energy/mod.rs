@@ -4,6 +4,7 @@
 pub mod assembly;
 pub mod deformation;
 pub mod dual;
+pub mod kinematics;
 pub mod potential;
 pub mod psd;
 pub mod scalar;

@@ -8,29 +8,114 @@
 //! and writes them in DOF space.
 
 use super::dual::HyperDual;
+use super::kinematics::{count_blocks, element_blocks, map_element, NodeMap};
 use super::psd::project_psd;
 use super::scalar::Scalar;
 use super::tensor::Vec3;
-use super::term::{EnergyTerm, EvalMode, StepCheck};
-use crate::state::EvalState;
+use super::term::{width_of_stride, EnergyTerm, EvalMode, StepCheck, NO_DOF};
+use crate::state::{angular_block, linear_block, EvalState, NO_BODY};
 use nalgebra::Vector3;
 use rayon::prelude::*;
+use std::sync::Mutex;
 
-/// A node of an element stencil.
+/// A node of an element stencil: something with a world position that the kinematic map
+/// connects to DOFs.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Node {
-    /// A deformable node (index into the simulation's node arrays); its DOF block is its
-    /// velocity, `∂x/∂v = dt·I`.
+    /// A node of the simulation's node arrays: a deformable node (its DOF block is its velocity,
+    /// `∂x/∂v = dt·I`) or a rigid body's mesh vertex (it moves with its body).
     Point(u32),
+    /// A point fixed in a rigid body: body index and body-local position (m, relative to the
+    /// centre of mass). Joints are written on these.
+    Rigid {
+        /// Body index.
+        body: u32,
+        /// Body-local position, m.
+        local: [f64; 3],
+    },
+    /// The angular velocity of a body (rad/s) in place of a position: its "position" is `ω` and
+    /// its start value `ω0` (velocity controllers are written on it).
+    AngularVelocity(u32),
 }
 
 impl Node {
-    /// The deformable node index.
+    /// The node-array index of a [`Node::Point`].
+    ///
+    /// # Panics
+    /// For other nodes.
     #[inline]
     pub fn index(&self) -> usize {
         match *self {
             Node::Point(i) => i as usize,
+            _ => panic!("not a node-array point: {self:?}"),
         }
+    }
+
+    /// A rigid-body point.
+    pub fn rigid(body: usize, local: &Vector3<f64>) -> Self {
+        Node::Rigid {
+            body: body as u32,
+            local: [local.x, local.y, local.z],
+        }
+    }
+
+    /// How the node depends on the DOFs in `state`.
+    #[inline]
+    pub fn map<'s>(&self, state: &'s EvalState) -> NodeMap<'s> {
+        let n = state.n_nodes();
+        match *self {
+            Node::Point(i) => {
+                let b = state.nodes.body[i as usize];
+                if b == NO_BODY {
+                    NodeMap::Free { block: i }
+                } else {
+                    NodeMap::Rigid {
+                        lin: linear_block(n, b as usize),
+                        ang: angular_block(n, b as usize),
+                        local: state.nodes.rest[i as usize],
+                        pose: &state.poses[b as usize],
+                    }
+                }
+            }
+            Node::Rigid { body, local } => NodeMap::Rigid {
+                lin: linear_block(n, body as usize),
+                ang: angular_block(n, body as usize),
+                local: Vector3::from(local),
+                pose: &state.poses[body as usize],
+            },
+            Node::AngularVelocity(body) => NodeMap::AngularVelocity {
+                ang: angular_block(n, body as usize),
+            },
+        }
+    }
+
+    /// Trial end-of-step position in `state`.
+    #[inline]
+    pub fn position(&self, state: &EvalState) -> Vector3<f64> {
+        match *self {
+            Node::Point(i) => state.x[i as usize],
+            Node::Rigid { body, local } => state.poses[body as usize].point(&Vector3::from(local)),
+            Node::AngularVelocity(body) => state.body_angular_velocity(body as usize),
+        }
+    }
+
+    /// Start-of-step position in `state`.
+    #[inline]
+    pub fn start_position(&self, state: &EvalState) -> Vector3<f64> {
+        match *self {
+            Node::Point(i) => state.nodes.x[i as usize],
+            Node::Rigid { body, local } => {
+                let b = body as usize;
+                state.bodies.position[b] + state.bodies.orientation[b] * Vector3::from(local)
+            }
+            Node::AngularVelocity(body) => state.bodies.angular_velocity[body as usize],
+        }
+    }
+
+    /// Whether the node is a deformable node (`∂x/∂v = dt·I` on its own block).
+    #[inline]
+    pub fn is_free(&self, state: &EvalState) -> bool {
+        matches!(*self, Node::Point(i) if state.nodes.body[i as usize] == NO_BODY)
     }
 }
 
@@ -54,8 +139,8 @@ impl<'a, const N: usize> Stencil<'a, N> {
     pub fn new(nodes: [Node; N], state: &'a EvalState<'a>) -> Self {
         Stencil {
             nodes,
-            x: nodes.map(|n| state.x[n.index()]),
-            x0: nodes.map(|n| state.nodes.x[n.index()]),
+            x: nodes.map(|n| n.position(state)),
+            x0: nodes.map(|n| n.start_position(state)),
             dt: state.dt,
             state,
         }
@@ -199,16 +284,31 @@ pub fn deterministic_sum(n: usize, f: impl Fn(usize) -> f64 + Sync) -> f64 {
     parts.iter().sum()
 }
 
+/// Identity of the element set a stencil width was computed for:
+/// (topology version, elements, nodes, bodies).
+type WidthKey = (u64, usize, usize, usize);
+
 /// A [`Potential`] as a solver [`EnergyTerm`].
 pub struct PotentialTerm<P, const N: usize> {
     /// The wrapped potential.
     pub potential: P,
+    /// Most DOF blocks of an element (`N` unless elements touch rigid bodies), cached.
+    width: Mutex<Option<(WidthKey, usize)>>,
 }
 
 impl<P, const N: usize> PotentialTerm<P, N> {
     /// Wrap a potential.
     pub fn new(potential: P) -> Self {
-        PotentialTerm { potential }
+        PotentialTerm {
+            potential,
+            width: Mutex::new(None),
+        }
+    }
+}
+
+impl<P: Potential<N>, const N: usize> PotentialTerm<P, N> {
+    fn all_free(&self, e: usize, state: &EvalState) -> bool {
+        state.bodies.is_empty() || self.potential.nodes(e).iter().all(|n| n.is_free(state))
     }
 }
 
@@ -231,13 +331,50 @@ impl<P: Potential<N>, const N: usize> EnergyTerm for PotentialTerm<P, N> {
     fn num_elements(&self) -> usize {
         self.potential.num_elements()
     }
-    fn stencil_width(&self) -> usize {
-        N
+    fn stencil_width(&self, state: &EvalState) -> usize {
+        let n = self.potential.num_elements();
+        let key = (
+            self.potential.topology_version(),
+            n,
+            state.n_nodes(),
+            state.bodies.len(),
+        );
+        let mut cache = self.width.lock().expect("no poisoned lock");
+        if let Some((k, w)) = *cache {
+            if k == key {
+                return w;
+            }
+        }
+        let w = if state.bodies.is_empty() {
+            N
+        } else {
+            (0..n)
+                .into_par_iter()
+                .map(|e| {
+                    if self.all_free(e, state) {
+                        N
+                    } else {
+                        count_blocks(&self.potential.nodes(e).map(|node| node.map(state)))
+                    }
+                })
+                .max()
+                .unwrap_or(N)
+                .max(N)
+        };
+        *cache = Some((key, w));
+        w
     }
-    fn write_stencils(&self, _state: &EvalState, out: &mut [u32]) {
-        out.par_chunks_mut(N).enumerate().for_each(|(e, o)| {
-            for (slot, node) in o.iter_mut().zip(self.potential.nodes(e)) {
-                *slot = node.index() as u32;
+    fn write_stencils(&self, state: &EvalState, out: &mut [u32]) {
+        let w = self.stencil_width(state);
+        out.par_chunks_mut(w).enumerate().for_each(|(e, o)| {
+            let nodes = self.potential.nodes(e);
+            if self.all_free(e, state) {
+                o.iter_mut().for_each(|s| *s = NO_DOF);
+                for (slot, node) in o.iter_mut().zip(nodes) {
+                    *slot = node.index() as u32;
+                }
+            } else {
+                element_blocks(&nodes.map(|node| node.map(state)), o);
             }
         });
     }
@@ -257,6 +394,14 @@ impl<P: Potential<N>, const N: usize> EnergyTerm for PotentialTerm<P, N> {
         let project = mode == EvalMode::ProjectedHessian && !self.potential.is_convex();
         let stencil = Stencil::new(self.potential.nodes(e), state);
         let mut d = HyperDual::<N>::constant(0.0);
+        if !self.all_free(e, state) {
+            // Rigid nodes: chain rule through the kinematic map, projected in DOF space (the
+            // second-order rotation term belongs in the Hessian before projection, DESIGN §2).
+            d = dual_derivatives(&self.potential, e, &stencil);
+            let maps: [NodeMap; N] = stencil.nodes.map(|node| node.map(state));
+            map_element(&maps, &d, dt, width_of_stride(o.len()), project, o);
+            return;
+        }
         let projected = element_derivatives(&self.potential, e, &stencil, project, &mut d);
         // Deformable map: ∂x/∂v = dt·I, so ∇ᵥ = dt ∇ₓ and Hᵥ = dt² Hₓ (projection commutes with
         // the positive scaling).
@@ -269,10 +414,15 @@ impl<P: Potential<N>, const N: usize> EnergyTerm for PotentialTerm<P, N> {
             o[1 + k] = dt * g;
         }
         let dt2 = dt * dt;
-        let base = 1 + 3 * N;
+        // The term's width exceeds N when other elements touch rigid bodies.
+        let w = width_of_stride(o.len());
+        if w > N {
+            o[1 + n..].iter_mut().for_each(|v| *v = 0.0);
+        }
+        let base = 1 + 3 * w;
         for a in 0..N {
             for b in 0..N {
-                let blk = &mut o[base + 9 * (a * N + b)..base + 9 * (a * N + b) + 9];
+                let blk = &mut o[base + 9 * (a * w + b)..base + 9 * (a * w + b) + 9];
                 for i in 0..3 {
                     for j in 0..3 {
                         blk[3 * i + j] = dt2 * h[(3 * a + i) * n + 3 * b + j];

@@ -18,6 +18,15 @@ pub fn element_stride(m: usize) -> usize {
     1 + 3 * m + 9 * m * m
 }
 
+/// The number of DOF blocks `m` of an element buffer of length [`element_stride`]`(m)`.
+#[inline]
+pub fn width_of_stride(len: usize) -> usize {
+    // 9m² + 3m + 1 = len
+    let m = ((((36 * (len - 1) + 9) as f64).sqrt() - 3.0) / 18.0).round() as usize;
+    debug_assert_eq!(element_stride(m), len);
+    m
+}
+
 /// What the assembler asks of a term.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum EvalMode {
@@ -44,8 +53,9 @@ pub trait EnergyTerm: Send + Sync {
     /// Number of elements.
     fn num_elements(&self) -> usize;
 
-    /// DOF blocks per element (stencils are padded with [`NO_DOF`]).
-    fn stencil_width(&self) -> usize;
+    /// DOF blocks per element (stencils are padded with [`NO_DOF`]). Elements on rigid bodies
+    /// have more blocks than nodes (two per body), hence the state.
+    fn stencil_width(&self, state: &EvalState) -> usize;
 
     /// Write the DOF blocks of every element (`num_elements × stencil_width`).
     fn write_stencils(&self, state: &EvalState, out: &mut [u32]);
@@ -74,6 +84,12 @@ pub trait EnergyTerm: Send + Sync {
     /// `trial` is the state at the full step.
     fn max_step_fraction(&self, _state: &EvalState, _trial: &EvalState) -> f64 {
         1.0
+    }
+
+    /// Whether a line-search trial state is admissible. CCD checks straight chords; points of
+    /// rigid bodies move on arcs, so contact also tests trial states for intersections.
+    fn is_valid_state(&self, _state: &EvalState) -> bool {
+        true
     }
 
     /// Checked after Newton converged; may harden a stiffness and ask for a retry.

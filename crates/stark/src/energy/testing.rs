@@ -2,10 +2,11 @@
 //! users writing their own potentials.
 
 use super::dual::HyperDual;
+use super::kinematics::BodyPose;
 use super::potential::{dual_derivatives, FastDerivatives, Potential, Stencil};
 use super::scalar::Scalar;
 use super::tensor::Vec3;
-use crate::state::{positions_from_velocities, EvalState, NodeArrays};
+use crate::state::{apply_kinematic_map, BodyArrays, EvalState, NodeArrays, NO_BODY};
 use nalgebra::Vector3;
 
 /// A self-contained state for evaluating energies in tests.
@@ -20,6 +21,10 @@ pub struct TestState {
     pub dt: f64,
     /// Gravity, m/s².
     pub gravity: Vector3<f64>,
+    /// Start-of-step rigid bodies (none unless added with [`TestState::with_bodies`]).
+    pub bodies: BodyArrays,
+    /// Trial body poses.
+    pub poses: Vec<BodyPose>,
 }
 
 impl TestState {
@@ -38,16 +43,42 @@ impl TestState {
             v: v0,
             force: vec![Vector3::zeros(); n],
             acceleration: vec![Vector3::zeros(); n],
+            body: vec![NO_BODY; n],
         };
-        let mut x = Vec::new();
-        positions_from_velocities(&nodes, &v, dt, &mut x);
-        TestState {
+        let mut s = TestState {
             nodes,
             v,
-            x,
+            x: Vec::new(),
             dt,
             gravity: Vector3::new(0.0, 0.0, -9.81),
+            bodies: BodyArrays::default(),
+            poses: Vec::new(),
+        };
+        s.place();
+        s
+    }
+
+    /// Add rigid bodies with trial linear and angular velocities `body_v` (one pair per body).
+    pub fn with_bodies(mut self, bodies: BodyArrays, body_v: &[(Vector3<f64>, Vector3<f64>)]) -> Self {
+        self.v.truncate(self.nodes.len());
+        for (v, w) in body_v {
+            self.v.push(*v);
+            self.v.push(*w);
         }
+        self.bodies = bodies;
+        self.place();
+        self
+    }
+
+    fn place(&mut self) {
+        apply_kinematic_map(
+            &self.nodes,
+            &self.bodies,
+            &self.v,
+            self.dt,
+            &mut self.x,
+            &mut self.poses,
+        );
     }
 
     /// The evaluation view.
@@ -59,6 +90,8 @@ impl TestState {
             nodes: &self.nodes,
             v: &self.v,
             x: &self.x,
+            bodies: &self.bodies,
+            poses: &self.poses,
         }
     }
 }

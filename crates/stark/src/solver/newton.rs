@@ -10,8 +10,9 @@ use super::linear::cholesky::CholeskySolver;
 use super::linear::pcg;
 use super::settings::{LinearSolver, NewtonSettings, Projection};
 use crate::energy::assembly::Assembler;
+use crate::energy::kinematics::BodyPose;
 use crate::energy::{EnergyTerm, EvalMode};
-use crate::state::{positions_from_velocities, EvalState, NodeArrays};
+use crate::state::{apply_kinematic_map, dof_blocks, start_velocities, BodyArrays, EvalState, NodeArrays};
 use nalgebra::Vector3;
 use serde::Serialize;
 use std::time::Instant;
@@ -113,14 +114,18 @@ pub struct NewtonWorkspace {
     rhs: Vec<f64>,
     step: Vec<f64>,
     x: Vec<Vector3<f64>>,
+    poses: Vec<BodyPose>,
     trial_v: Vec<Vector3<f64>>,
     trial_x: Vec<Vector3<f64>>,
+    trial_poses: Vec<BodyPose>,
 }
 
 /// The fixed data of one step.
 pub struct StepProblem<'a> {
     /// Start-of-step nodes.
     pub nodes: &'a NodeArrays,
+    /// Start-of-step rigid bodies.
+    pub bodies: &'a BodyArrays,
     /// Time step, s.
     pub dt: f64,
     /// End-of-step time, s.
@@ -130,7 +135,7 @@ pub struct StepProblem<'a> {
 }
 
 impl StepProblem<'_> {
-    fn state<'s>(&'s self, v: &'s [Vector3<f64>], x: &'s [Vector3<f64>]) -> EvalState<'s> {
+    fn state<'s>(&'s self, v: &'s [Vector3<f64>], x: &'s [Vector3<f64>], poses: &'s [BodyPose]) -> EvalState<'s> {
         EvalState {
             dt: self.dt,
             time: self.time,
@@ -138,7 +143,13 @@ impl StepProblem<'_> {
             nodes: self.nodes,
             v,
             x,
+            bodies: self.bodies,
+            poses,
         }
+    }
+
+    fn place(&self, v: &[Vector3<f64>], x: &mut Vec<Vector3<f64>>, poses: &mut Vec<BodyPose>) {
+        apply_kinematic_map(self.nodes, self.bodies, v, self.dt, x, poses);
     }
 }
 
@@ -167,7 +178,7 @@ pub fn solve(
     v: &mut Vec<Vector3<f64>>,
     settings: &NewtonSettings,
 ) -> Result<NewtonReport, NewtonFailure> {
-    let n = problem.nodes.len();
+    let n = dof_blocks(problem.nodes, problem.bodies);
     let dt = problem.dt;
     let mut project = settings.projection == Projection::Always;
     ws.gradient.resize(3 * n, 0.0);
@@ -188,16 +199,15 @@ pub fn solve(
     // every node at x0, which is always valid).
     v.clear();
     v.resize(n, Vector3::zeros());
-    positions_from_velocities(problem.nodes, v, dt, &mut ws.x);
-    ws.trial_v.clear();
-    ws.trial_v.extend_from_slice(&problem.nodes.v);
-    positions_from_velocities(problem.nodes, &ws.trial_v, dt, &mut ws.trial_x);
+    problem.place(v, &mut ws.x, &mut ws.poses);
+    start_velocities(problem.nodes, problem.bodies, &mut ws.trial_v);
+    problem.place(&ws.trial_v, &mut ws.trial_x, &mut ws.trial_poses);
     {
         let t0 = Instant::now();
-        let from = problem.state(v, &ws.x);
-        let to = problem.state(&ws.trial_v, &ws.trial_x);
+        let from = problem.state(v, &ws.x, &ws.poses);
+        let to = problem.state(&ws.trial_v, &ws.trial_x, &ws.trial_poses);
         let alpha = max_step(terms, &from, &to);
-        for (vi, v0) in v.iter_mut().zip(&problem.nodes.v) {
+        for (vi, v0) in v.iter_mut().zip(&ws.trial_v) {
             *vi = v0 * alpha;
         }
         report.times.ccd_s += t0.elapsed().as_secs_f64();
@@ -205,10 +215,10 @@ pub fn solve(
 
     let mut first_residual: Option<f64> = None;
     for iteration in 0..settings.max_iterations {
-        positions_from_velocities(problem.nodes, v, dt, &mut ws.x);
+        problem.place(v, &mut ws.x, &mut ws.poses);
         let t0 = Instant::now();
         {
-            let state = problem.state(v, &ws.x);
+            let state = problem.state(v, &ws.x, &ws.poses);
             for t in terms.iter_mut() {
                 t.prepare_evaluation(&state);
             }
@@ -221,7 +231,7 @@ pub fn solve(
         let mut r0;
         loop {
             let t1 = Instant::now();
-            let state = problem.state(v, &ws.x);
+            let state = problem.state(v, &ws.x, &ws.poses);
             let shared: Vec<&dyn EnergyTerm> = terms.iter().map(|t| &**t as &dyn EnergyTerm).collect();
             let mode = if project {
                 EvalMode::ProjectedHessian
@@ -296,10 +306,10 @@ pub fn solve(
 
         // Line search.
         axpy_velocities(v, &ws.step, 1.0, &mut ws.trial_v);
-        positions_from_velocities(problem.nodes, &ws.trial_v, dt, &mut ws.trial_x);
+        problem.place(&ws.trial_v, &mut ws.trial_x, &mut ws.trial_poses);
         let mut alpha = {
-            let from = problem.state(v, &ws.x);
-            let to = problem.state(&ws.trial_v, &ws.trial_x);
+            let from = problem.state(v, &ws.x, &ws.poses);
+            let to = problem.state(&ws.trial_v, &ws.trial_x, &ws.trial_poses);
             max_step(terms, &from, &to)
         };
         report.times.ccd_s += t_ccd.elapsed().as_secs_f64();
@@ -310,14 +320,20 @@ pub fn solve(
         let mut accepted = false;
         for _ in 0..settings.max_line_search_iterations {
             axpy_velocities(v, &ws.step, alpha, &mut ws.trial_v);
-            positions_from_velocities(problem.nodes, &ws.trial_v, dt, &mut ws.trial_x);
+            problem.place(&ws.trial_v, &mut ws.trial_x, &mut ws.trial_poses);
             {
-                let trial = problem.state(&ws.trial_v, &ws.trial_x);
+                let trial = problem.state(&ws.trial_v, &ws.trial_x, &ws.trial_poses);
                 for t in terms.iter_mut() {
                     t.prepare_evaluation(&trial);
                 }
             }
-            let trial = problem.state(&ws.trial_v, &ws.trial_x);
+            let trial = problem.state(&ws.trial_v, &ws.trial_x, &ws.trial_poses);
+            if !terms.iter().all(|t| t.is_valid_state(&trial)) {
+                // A rigid point left its chord and crossed a surface (see `is_valid_state`).
+                report.line_search_evaluations += 1;
+                alpha *= 0.5;
+                continue;
+            }
             let e = total_energy(terms, &trial);
             report.line_search_evaluations += 1;
             if e.is_finite() && e <= energy + settings.armijo * alpha * descent + noise {

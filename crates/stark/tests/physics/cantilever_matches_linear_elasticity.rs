@@ -612,6 +612,8 @@ fn stable_neo_hookean_hessian_at_rest_is_the_linear_elastic_stiffness() {
         nodes: &sim.nodes,
         v: &at_rest,
         x: &sim.nodes.x,
+        bodies: &sim.bodies,
+        poses: &[],
     };
     let tets = &sim.deformables.tets.potential;
     let (mu, lambda) = lame();

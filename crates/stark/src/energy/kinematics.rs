@@ -1,0 +1,405 @@
+//! The kinematic map from DOF velocities to world positions (DESIGN §2, paper eq. 1).
+//!
+//! Energies are functions of world positions `x` of their nodes. A deformable node is at
+//! `x = x0 + dt·v` (`∂x/∂v = dt·I`). A point `p` (body-local, relative to the centre of mass) of
+//! a rigid body is at `x = t + R(q)·p` with `t = t0 + dt·v` and
+//! `q = normalize(q0 + ½·dt·(0, ω) ⊗ q0)`, so it depends on the body's linear and angular
+//! velocity blocks, non-linearly on `ω`. [`BodyPose`] holds the trial pose with the first and
+//! second derivatives of `R` with respect to `ω`; [`map_element`] applies the chain rule
+//! `∇ᵥ = Jᵀ∇ₓ`, `Hᵥ = JᵀHₓJ + Σ (∇ₓ)ₖ ∂²xₖ/∂ω²` to an element's position-space derivatives.
+
+use super::dual::HyperDual;
+use super::psd::project_psd;
+use super::scalar::Scalar;
+use super::term::NO_DOF;
+use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
+
+/// Trial pose of a rigid body and the derivatives of its rotation with respect to `ω`.
+#[derive(Clone, Copy, Debug)]
+pub struct BodyPose {
+    /// Centre of mass, m.
+    pub t: Vector3<f64>,
+    /// Rotation matrix.
+    pub r: Matrix3<f64>,
+    /// `∂R/∂ω_k`, s.
+    pub dr: [Matrix3<f64>; 3],
+    /// `∂²R/∂ω_k∂ω_l`, s².
+    pub d2r: [[Matrix3<f64>; 3]; 3],
+}
+
+impl BodyPose {
+    /// The pose at rest (`v = ω = 0`): the start-of-step pose.
+    pub fn at_rest(t0: Vector3<f64>, q0: &UnitQuaternion<f64>, dt: f64) -> Self {
+        Self::new(t0, q0, &Vector3::zeros(), &Vector3::zeros(), dt)
+    }
+
+    /// The end-of-step pose for velocities `v` (m/s) and `ω` (rad/s) over `dt` (s).
+    pub fn new(t0: Vector3<f64>, q0: &UnitQuaternion<f64>, v: &Vector3<f64>, w: &Vector3<f64>, dt: f64) -> Self {
+        let ws = HyperDual::<1>::variables(&[*w]);
+        let r = rotation_after::<HyperDual<1>>(q0, &[ws[0].0[0], ws[0].0[1], ws[0].0[2]], dt);
+        let mut pose = BodyPose {
+            t: t0 + v * dt,
+            r: Matrix3::zeros(),
+            dr: [Matrix3::zeros(); 3],
+            d2r: [[Matrix3::zeros(); 3]; 3],
+        };
+        for i in 0..3 {
+            for j in 0..3 {
+                let e = &r[i][j];
+                pose.r[(i, j)] = e.value;
+                for k in 0..3 {
+                    pose.dr[k][(i, j)] = e.grad[0][k];
+                    for l in 0..3 {
+                        let (a, b) = (k.min(l), k.max(l));
+                        pose.d2r[k][l][(i, j)] = e.hess[0][a][0][b];
+                    }
+                }
+            }
+        }
+        pose
+    }
+
+    /// World position of the body-local point `p`.
+    #[inline]
+    pub fn point(&self, p: &Vector3<f64>) -> Vector3<f64> {
+        self.t + self.r * p
+    }
+
+    /// `∂x/∂ω` of the body-local point `p` (columns `∂R/∂ω_k · p`).
+    #[inline]
+    pub fn point_jacobian_w(&self, p: &Vector3<f64>) -> Matrix3<f64> {
+        Matrix3::from_columns(&[self.dr[0] * p, self.dr[1] * p, self.dr[2] * p])
+    }
+}
+
+/// The integrated orientation `normalize(q0 + ½·dt·(0, ω) ⊗ q0)` (DESIGN §2).
+pub fn integrate_orientation(q0: &UnitQuaternion<f64>, w: &Vector3<f64>, dt: f64) -> UnitQuaternion<f64> {
+    let q = q0.quaternion() + Quaternion::from_parts(0.0, *w) * q0.quaternion() * (0.5 * dt);
+    UnitQuaternion::from_quaternion(q)
+}
+
+/// Rotation matrix `R(normalize(q0 + ½·dt·(0, ω) ⊗ q0))`, generic over the scalar type, as rows.
+pub fn rotation_after<S: Scalar>(q0: &UnitQuaternion<f64>, w: &[S; 3], dt: f64) -> [[S; 3]; 3] {
+    let (w0, u) = (q0.w, q0.imag());
+    let h = 0.5 * dt;
+    // (0, ω) ⊗ (w0, u) = (−ω·u, w0·ω + ω × u)
+    let qw = S::constant(w0) - (w[0] * u.x + w[1] * u.y + w[2] * u.z) * h;
+    let qx = S::constant(u.x) + (w[0] * w0 + (w[1] * u.z - w[2] * u.y)) * h;
+    let qy = S::constant(u.y) + (w[1] * w0 + (w[2] * u.x - w[0] * u.z)) * h;
+    let qz = S::constant(u.z) + (w[2] * w0 + (w[0] * u.y - w[1] * u.x)) * h;
+    rotation_of_unnormalized(qw, qx, qy, qz)
+}
+
+/// Rotation matrix of the unnormalised quaternion `(w, x, y, z)`, as rows.
+pub fn rotation_of_unnormalized<S: Scalar>(w: S, x: S, y: S, z: S) -> [[S; 3]; 3] {
+    let s = (w * w + x * x + y * y + z * z).recip() * 2.0;
+    let one = S::constant(1.0);
+    [
+        [one - s * (y * y + z * z), s * (x * y - z * w), s * (x * z + y * w)],
+        [s * (x * y + z * w), one - s * (x * x + z * z), s * (y * z - x * w)],
+        [s * (x * z - y * w), s * (y * z + x * w), one - s * (x * x + y * y)],
+    ]
+}
+
+/// How one element node depends on the DOFs.
+#[derive(Clone, Copy, Debug)]
+pub enum NodeMap<'a> {
+    /// A deformable node: `x = x0 + dt·v` of DOF block `block`.
+    Free {
+        /// DOF block.
+        block: u32,
+    },
+    /// A rigid-body point `x = t + R·p`.
+    Rigid {
+        /// Linear velocity block.
+        lin: u32,
+        /// Angular velocity block.
+        ang: u32,
+        /// Body-local point, m.
+        local: Vector3<f64>,
+        /// Trial pose of the body.
+        pose: &'a BodyPose,
+    },
+    /// The body's angular velocity itself (`x = ω`, identity Jacobian).
+    AngularVelocity {
+        /// Angular velocity block.
+        ang: u32,
+    },
+    /// Padding: depends on no DOF.
+    Fixed,
+}
+
+impl NodeMap<'_> {
+    /// Whether the map is `dt·I` on one block.
+    #[inline]
+    pub fn is_free(&self) -> bool {
+        matches!(self, NodeMap::Free { .. })
+    }
+
+    fn blocks(&self) -> ([u32; 2], usize) {
+        match *self {
+            NodeMap::Free { block } => ([block, NO_DOF], 1),
+            NodeMap::Rigid { lin, ang, .. } => ([lin, ang], 2),
+            NodeMap::AngularVelocity { ang } => ([ang, NO_DOF], 1),
+            NodeMap::Fixed => ([NO_DOF, NO_DOF], 0),
+        }
+    }
+}
+
+/// The distinct DOF blocks of an element, in order of first appearance, padded with [`NO_DOF`];
+/// returns their count.
+pub fn element_blocks(maps: &[NodeMap], out: &mut [u32]) -> usize {
+    out.iter_mut().for_each(|o| *o = NO_DOF);
+    let mut n = 0;
+    for m in maps {
+        let (b, k) = m.blocks();
+        for &blk in &b[..k] {
+            if !out[..n].contains(&blk) {
+                out[n] = blk;
+                n += 1;
+            }
+        }
+    }
+    n
+}
+
+/// Number of distinct DOF blocks of an element.
+pub fn count_blocks(maps: &[NodeMap]) -> usize {
+    let mut buf = [NO_DOF; 16];
+    element_blocks(maps, &mut buf[..(2 * maps.len()).min(16)])
+}
+
+/// Map position-space derivatives of an element (value, gradient and full Hessian of `d`) to its
+/// DOF blocks (see [`element_blocks`]), writing the solver layout of
+/// [`element_stride`](super::term::element_stride)`(width)` into `out`. With `project`, the DOF
+/// Hessian (including the second-order rigid terms) is projected to positive semi-definite.
+pub fn map_element<const N: usize>(
+    maps: &[NodeMap; N],
+    d: &HyperDual<N>,
+    dt: f64,
+    width: usize,
+    project: bool,
+    out: &mut [f64],
+) {
+    let mut blocks = [NO_DOF; 16];
+    let m = element_blocks(maps, &mut blocks[..2 * N]);
+    debug_assert!(m <= width);
+    let slot = |b: u32| blocks[..m].iter().position(|&x| x == b).expect("block of the element");
+    // Per node: up to two (slot, Jacobian) pairs.
+    let eye = Matrix3::identity();
+    let jac: [[(usize, Matrix3<f64>); 2]; N] = std::array::from_fn(|a| match maps[a] {
+        NodeMap::Free { block } => [(slot(block), eye * dt), (usize::MAX, eye)],
+        NodeMap::Rigid { lin, ang, local, pose } => [(slot(lin), eye * dt), (slot(ang), pose.point_jacobian_w(&local))],
+        NodeMap::AngularVelocity { ang } => [(slot(ang), eye), (usize::MAX, eye)],
+        NodeMap::Fixed => [(usize::MAX, eye), (usize::MAX, eye)],
+    });
+    let n = 3 * m;
+    let mut g = [0.0; 48];
+    let mut h = [0.0; 48 * 48];
+    for a in 0..N {
+        let ga = Vector3::from(d.grad[a]);
+        for &(s, j) in &jac[a] {
+            if s == usize::MAX {
+                continue;
+            }
+            let gs = j.transpose() * ga;
+            for i in 0..3 {
+                g[3 * s + i] += gs[i];
+            }
+        }
+        for b in 0..N {
+            let hab = Matrix3::from_fn(|i, k| d.hess[a][i][b][k]);
+            for &(sa, ja) in &jac[a] {
+                if sa == usize::MAX {
+                    continue;
+                }
+                let left = ja.transpose() * hab;
+                for &(sb, jb) in &jac[b] {
+                    if sb == usize::MAX {
+                        continue;
+                    }
+                    let blk = left * jb;
+                    for i in 0..3 {
+                        for k in 0..3 {
+                            h[(3 * sa + i) * n + 3 * sb + k] += blk[(i, k)];
+                        }
+                    }
+                }
+            }
+        }
+        // Second-order term of the rotation: Σᵢ gᵢ ∂²xᵢ/∂ω_k∂ω_l.
+        if let NodeMap::Rigid { ang, local, pose, .. } = maps[a] {
+            let s = slot(ang);
+            for k in 0..3 {
+                for l in 0..3 {
+                    h[(3 * s + k) * n + 3 * s + l] += ga.dot(&(pose.d2r[k][l] * local));
+                }
+            }
+        }
+    }
+    if project {
+        project_psd(&mut h[..n * n], n);
+    }
+    out.iter_mut().for_each(|o| *o = 0.0);
+    out[0] = d.value;
+    out[1..1 + n].copy_from_slice(&g[..n]);
+    let base = 1 + 3 * width;
+    for a in 0..m {
+        for b in 0..m {
+            let blk = &mut out[base + 9 * (a * width + b)..base + 9 * (a * width + b) + 9];
+            for i in 0..3 {
+                for k in 0..3 {
+                    blk[3 * i + k] = h[(3 * a + i) * n + 3 * b + k];
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn pose_at(w: &Vector3<f64>) -> (BodyPose, UnitQuaternion<f64>) {
+        let q0 = UnitQuaternion::from_euler_angles(0.3, -0.7, 1.1);
+        (
+            BodyPose::new(Vector3::new(1.0, 2.0, 3.0), &q0, &Vector3::zeros(), w, 0.01),
+            q0,
+        )
+    }
+
+    #[test]
+    fn rotation_matches_integrated_quaternion() {
+        let w = Vector3::new(3.0, -20.0, 7.0);
+        let (pose, q0) = pose_at(&w);
+        let q = integrate_orientation(&q0, &w, 0.01);
+        assert!((pose.r - q.to_rotation_matrix().into_inner()).norm() < 1e-14);
+    }
+
+    #[test]
+    fn rotation_derivatives_match_finite_differences() {
+        let w = Vector3::new(3.0, -20.0, 7.0);
+        let (pose, _) = pose_at(&w);
+        let h = 1e-5;
+        for k in 0..3 {
+            let mut wp = w;
+            wp[k] += h;
+            let mut wm = w;
+            wm[k] -= h;
+            let (pp, _) = pose_at(&wp);
+            let (pm, _) = pose_at(&wm);
+            let fd = (pp.r - pm.r) / (2.0 * h);
+            assert!((fd - pose.dr[k]).norm() < 1e-9 * pose.dr[k].norm().max(1.0), "dR/dw{k}");
+            for l in 0..3 {
+                let fd2 = (pp.dr[l] - pm.dr[l]) / (2.0 * h);
+                assert!((fd2 - pose.d2r[k][l]).norm() < 1e-7, "d2R/dw{k}dw{l}");
+            }
+        }
+    }
+
+    #[test]
+    fn mapped_derivatives_match_finite_differences() {
+        // E = ½‖x_a − x_b‖² + (x_a·c)³ for a rigid point a and a deformable node b.
+        let c = Vector3::new(0.3, -0.2, 0.5);
+        let p = Vector3::new(0.1, -0.2, 0.3);
+        let xb0 = Vector3::new(1.5, 1.0, 2.0);
+        let dt = 0.01;
+        let q0 = UnitQuaternion::from_euler_angles(0.3, -0.7, 1.1);
+        let t0 = Vector3::new(1.0, 2.0, 3.0);
+        // DOFs: [v_body, w_body, v_node] (blocks 0, 1, 2).
+        let energy = |u: &[f64; 9]| -> f64 {
+            let v = Vector3::new(u[0], u[1], u[2]);
+            let w = Vector3::new(u[3], u[4], u[5]);
+            let pose = BodyPose::new(t0, &q0, &v, &w, dt);
+            let xa = pose.point(&p);
+            let xb = xb0 + Vector3::new(u[6], u[7], u[8]) * dt;
+            0.5 * (xa - xb).norm_squared() + xa.dot(&c).powi(3)
+        };
+        let u = [0.5, -1.0, 2.0, 4.0, -3.0, 6.0, 1.0, 0.2, -0.3];
+        let v = Vector3::new(u[0], u[1], u[2]);
+        let w = Vector3::new(u[3], u[4], u[5]);
+        let pose = BodyPose::new(t0, &q0, &v, &w, dt);
+        let xa = pose.point(&p);
+        let xb = xb0 + Vector3::new(u[6], u[7], u[8]) * dt;
+        let xs = HyperDual::<2>::variables(&[xa, xb]);
+        let diff = [
+            xs[0].0[0] - xs[1].0[0],
+            xs[0].0[1] - xs[1].0[1],
+            xs[0].0[2] - xs[1].0[2],
+        ];
+        let dot = xs[0].0[0] * c.x + xs[0].0[1] * c.y + xs[0].0[2] * c.z;
+        let mut d = (diff[0] * diff[0] + diff[1] * diff[1] + diff[2] * diff[2]) * 0.5 + dot * dot * dot;
+        crate::energy::potential::symmetrize(&mut d);
+        let maps = [
+            NodeMap::Rigid {
+                lin: 0,
+                ang: 1,
+                local: p,
+                pose: &pose,
+            },
+            NodeMap::Free { block: 2 },
+        ];
+        let width = 3;
+        let mut out = vec![0.0; crate::energy::term::element_stride(width)];
+        map_element(&maps, &d, dt, width, false, &mut out);
+        let h = 1e-6;
+        for i in 0..9 {
+            let mut up = u;
+            up[i] += h;
+            let mut um = u;
+            um[i] -= h;
+            let fd = (energy(&up) - energy(&um)) / (2.0 * h);
+            assert!(
+                (fd - out[1 + i]).abs() < 1e-6 * fd.abs().max(1e-3),
+                "gradient {i}: {fd} vs {}",
+                out[1 + i]
+            );
+        }
+        // Hessian by differences of the mapped gradient.
+        let grad_at = |u: &[f64; 9]| -> Vec<f64> {
+            let v = Vector3::new(u[0], u[1], u[2]);
+            let w = Vector3::new(u[3], u[4], u[5]);
+            let pose = BodyPose::new(t0, &q0, &v, &w, dt);
+            let xa = pose.point(&p);
+            let xb = xb0 + Vector3::new(u[6], u[7], u[8]) * dt;
+            let xs = HyperDual::<2>::variables(&[xa, xb]);
+            let diff = [
+                xs[0].0[0] - xs[1].0[0],
+                xs[0].0[1] - xs[1].0[1],
+                xs[0].0[2] - xs[1].0[2],
+            ];
+            let dot = xs[0].0[0] * c.x + xs[0].0[1] * c.y + xs[0].0[2] * c.z;
+            let mut d = (diff[0] * diff[0] + diff[1] * diff[1] + diff[2] * diff[2]) * 0.5 + dot * dot * dot;
+            crate::energy::potential::symmetrize(&mut d);
+            let maps = [
+                NodeMap::Rigid {
+                    lin: 0,
+                    ang: 1,
+                    local: p,
+                    pose: &pose,
+                },
+                NodeMap::Free { block: 2 },
+            ];
+            let mut out = vec![0.0; crate::energy::term::element_stride(3)];
+            map_element(&maps, &d, dt, 3, false, &mut out);
+            out[1..10].to_vec()
+        };
+        let base = 1 + 3 * width;
+        for i in 0..9 {
+            let mut up = u;
+            up[i] += h;
+            let mut um = u;
+            um[i] -= h;
+            let (gp, gm) = (grad_at(&up), grad_at(&um));
+            for j in 0..9 {
+                let fd = (gp[j] - gm[j]) / (2.0 * h);
+                let (bi, bj) = (i / 3, j / 3);
+                let exact = out[base + 9 * (bj * width + bi) + 3 * (j % 3) + i % 3];
+                assert!(
+                    (fd - exact).abs() < 1e-5 * fd.abs().max(1e-2),
+                    "H[{j}][{i}]: {fd} vs {exact}"
+                );
+            }
+        }
+    }
+}

@@ -1,0 +1,386 @@
+//! Rigid bodies: state, inertia, mass properties and joints (one file each).
+//!
+//! A body has 6 velocity DOFs (linear `v`, angular `ω`), integrated as in DESIGN §2. Everything
+//! else sees a body through the kinematic map ([`crate::energy::kinematics`]): its collision mesh
+//! vertices are nodes of the simulation that move with it, and joints are potentials on
+//! body-fixed points ([`Node::Rigid`](crate::energy::Node::Rigid)), so contact, friction and
+//! attachments work on bodies unchanged.
+
+pub mod inertia;
+pub mod mass_properties;
+
+use crate::contact::ContactHandle;
+use crate::deformables::NodeSetHandle;
+use crate::energy::kinematics::integrate_orientation;
+use crate::energy::EnergyTerm;
+use crate::error::{Result, StarkError};
+use crate::geometry::mesh;
+use crate::io::output::OutputCells;
+use crate::simulation::Simulation;
+use crate::state::{BodyArrays, NodeArrays, NO_BODY};
+use nalgebra::{Matrix3, UnitQuaternion, Vector3};
+
+pub use inertia::{RigidBodyParams, RigidInertia};
+pub use mass_properties::MassProperties;
+
+/// A rigid body of a simulation.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+pub struct RigidBodyHandle {
+    /// Index of the body.
+    pub index: u32,
+}
+
+impl RigidBodyHandle {
+    /// Index as `usize`.
+    #[inline]
+    pub fn i(&self) -> usize {
+        self.index as usize
+    }
+}
+
+/// The collision mesh of a rigid body: its vertices are nodes that move with the body.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RigidMeshHandle {
+    /// The body.
+    pub body: RigidBodyHandle,
+    /// Its vertices in the node arrays.
+    pub nodes: NodeSetHandle,
+    /// Its contact object.
+    pub contact: ContactHandle,
+}
+
+/// Every rigid-body model of a simulation.
+#[derive(Default)]
+pub struct RigidBodies {
+    /// Label of each body.
+    pub labels: Vec<String>,
+    /// Inertia, gravity, external forces and damping.
+    pub inertia: RigidInertia,
+}
+
+impl RigidBodies {
+    /// All terms, for the solver.
+    pub fn terms_mut(&mut self) -> Vec<&mut dyn EnergyTerm> {
+        vec![&mut self.inertia]
+    }
+
+    /// The body with this label.
+    pub fn by_label(&self, label: &str) -> Option<RigidBodyHandle> {
+        self.labels
+            .iter()
+            .position(|l| l == label)
+            .map(|i| RigidBodyHandle { index: i as u32 })
+    }
+
+    /// Add to `masses` (per node) each rigid node's share of its body's mass (for choosing the
+    /// contact stiffness).
+    pub fn add_node_masses(nodes: &NodeArrays, bodies: &BodyArrays, masses: &mut [f64]) {
+        if bodies.is_empty() {
+            return;
+        }
+        let mut count = vec![0usize; bodies.len()];
+        for &b in &nodes.body {
+            if b != NO_BODY {
+                count[b as usize] += 1;
+            }
+        }
+        for (m, &b) in masses.iter_mut().zip(&nodes.body) {
+            if b != NO_BODY {
+                *m += bodies.mass[b as usize] / count[b as usize] as f64;
+            }
+        }
+    }
+}
+
+fn check_vector(label: &str, what: &str, v: &Vector3<f64>) -> Result<()> {
+    if v.iter().all(|c| c.is_finite()) {
+        Ok(())
+    } else {
+        Err(StarkError::InvalidInput(format!(
+            "{what} of rigid body '{label}' is not finite: {v:?}"
+        )))
+    }
+}
+
+impl Simulation {
+    /// Add a rigid body of `mass_kg` and inertia tensor `inertia_kg_m2` (about its centre of
+    /// mass, in its body frame) with its centre of mass at `position_m` and body frame rotated by
+    /// `orientation`. It starts at rest.
+    pub fn add_rigid_body(
+        &mut self,
+        label: &str,
+        mass_kg: f64,
+        inertia_kg_m2: Matrix3<f64>,
+        position_m: Vector3<f64>,
+        orientation: UnitQuaternion<f64>,
+    ) -> Result<RigidBodyHandle> {
+        if label.is_empty() || self.rigid_bodies.by_label(label).is_some() {
+            return Err(StarkError::InvalidInput(format!(
+                "rigid body label '{label}' is empty or already used"
+            )));
+        }
+        if !(mass_kg > 0.0 && mass_kg.is_finite()) {
+            return Err(StarkError::InvalidInput(format!(
+                "mass of rigid body '{label}' must be positive, got {mass_kg} kg"
+            )));
+        }
+        let symmetric = (inertia_kg_m2 - inertia_kg_m2.transpose()).norm() <= 1e-9 * inertia_kg_m2.norm();
+        let eig = inertia_kg_m2.symmetric_eigenvalues();
+        if !symmetric || !inertia_kg_m2.iter().all(|c| c.is_finite()) || eig.min() <= 0.0 {
+            return Err(StarkError::InvalidInput(format!(
+                "inertia tensor of rigid body '{label}' must be symmetric positive definite, got {inertia_kg_m2:?}"
+            )));
+        }
+        check_vector(label, "position", &position_m)?;
+        let b = &mut self.bodies;
+        b.position.push(position_m);
+        b.orientation.push(orientation);
+        b.velocity.push(Vector3::zeros());
+        b.angular_velocity.push(Vector3::zeros());
+        b.mass.push(mass_kg);
+        b.inertia_local.push(inertia_kg_m2);
+        b.force.push(Vector3::zeros());
+        b.torque.push(Vector3::zeros());
+        b.acceleration.push(Vector3::zeros());
+        b.angular_acceleration.push(Vector3::zeros());
+        self.rigid_bodies.labels.push(label.to_string());
+        self.rigid_bodies.inertia.params.push(RigidBodyParams::default());
+        Ok(RigidBodyHandle {
+            index: (b.len() - 1) as u32,
+        })
+    }
+
+    /// Add a rigid body from its mass properties; its centre of mass goes to `position_m`.
+    pub fn add_rigid_body_with(
+        &mut self,
+        label: &str,
+        props: &MassProperties,
+        position_m: Vector3<f64>,
+        orientation: UnitQuaternion<f64>,
+    ) -> Result<RigidBodyHandle> {
+        self.add_rigid_body(label, props.mass_kg, props.inertia_kg_m2, position_m, orientation)
+    }
+
+    /// Give body `body` a collision mesh (vertices in the body frame, relative to its centre of
+    /// mass) with contact thickness `thickness_m` (or the default). Its vertices become nodes that
+    /// move with the body; the mesh is written to the output frames. Self-collision within the
+    /// body is off.
+    pub fn add_rigid_collision_mesh(
+        &mut self,
+        body: RigidBodyHandle,
+        local_vertices: &[Vector3<f64>],
+        triangles: &[[usize; 3]],
+        thickness_m: Option<f64>,
+    ) -> Result<RigidMeshHandle> {
+        let b = self.check_body(body)?;
+        let label = self.rigid_bodies.labels[b].clone();
+        let thickness = thickness_m
+            .or(self.settings.contact.default_thickness_m)
+            .ok_or_else(|| {
+                StarkError::InvalidInput(format!(
+                    "collision mesh of rigid body '{label}' needs a contact thickness (or settings.contact.default_thickness_m)"
+                ))
+            })?;
+        let world: Vec<Vector3<f64>> = local_vertices
+            .iter()
+            .map(|p| self.bodies.position[b] + self.bodies.orientation[b] * p)
+            .collect();
+        let mesh_label = format!("{label}.mesh{}", self.deformables.sets.len());
+        let nodes = self.add_nodes(&mesh_label, &world)?;
+        for (k, i) in nodes.range().enumerate() {
+            self.nodes.body[i] = body.index;
+            self.nodes.rest[i] = local_vertices[k];
+        }
+        let edges = mesh::edges_from_triangles(triangles);
+        let all: Vec<usize> = (0..local_vertices.len()).collect();
+        let rest = self.nodes.rest.clone();
+        let contact = self
+            .contact
+            .add_object(&label, nodes, &rest, triangles, &edges, &all, thickness)?;
+        self.contact.disable_collision(contact, contact)?;
+        self.output
+            .add_mesh(&label, nodes, OutputCells::Triangles(triangles.to_vec()));
+        Ok(RigidMeshHandle { body, nodes, contact })
+    }
+
+    fn check_body(&self, body: RigidBodyHandle) -> Result<usize> {
+        let i = body.i();
+        if i < self.bodies.len() {
+            Ok(i)
+        } else {
+            Err(StarkError::InvalidHandle {
+                kind: "rigid body",
+                index: i,
+                len: self.bodies.len(),
+            })
+        }
+    }
+
+    /// Number of rigid bodies.
+    pub fn num_rigid_bodies(&self) -> usize {
+        self.bodies.len()
+    }
+
+    /// Centre of mass of a body, m.
+    pub fn body_position(&self, body: RigidBodyHandle) -> Vector3<f64> {
+        self.bodies.position[body.i()]
+    }
+    /// Orientation of a body (body → world).
+    pub fn body_orientation(&self, body: RigidBodyHandle) -> UnitQuaternion<f64> {
+        self.bodies.orientation[body.i()]
+    }
+    /// Linear velocity of the centre of mass, m/s.
+    pub fn body_velocity(&self, body: RigidBodyHandle) -> Vector3<f64> {
+        self.bodies.velocity[body.i()]
+    }
+    /// Angular velocity (world frame), rad/s.
+    pub fn body_angular_velocity(&self, body: RigidBodyHandle) -> Vector3<f64> {
+        self.bodies.angular_velocity[body.i()]
+    }
+    /// Angular momentum about the centre of mass (world), kg·m²/s.
+    pub fn body_angular_momentum(&self, body: RigidBodyHandle) -> Vector3<f64> {
+        self.bodies.inertia_world(body.i()) * self.bodies.angular_velocity[body.i()]
+    }
+    /// World position of the body-local point `local_m`.
+    pub fn body_point_to_world(&self, body: RigidBodyHandle, local_m: &Vector3<f64>) -> Vector3<f64> {
+        self.bodies.position[body.i()] + self.bodies.orientation[body.i()] * local_m
+    }
+    /// Body-local coordinates of the world point `world_m`.
+    pub fn body_point_to_local(&self, body: RigidBodyHandle, world_m: &Vector3<f64>) -> Vector3<f64> {
+        self.bodies.orientation[body.i()].inverse() * (world_m - self.bodies.position[body.i()])
+    }
+    /// World direction of the body-local direction `local`.
+    pub fn body_direction_to_world(&self, body: RigidBodyHandle, local: &Vector3<f64>) -> Vector3<f64> {
+        self.bodies.orientation[body.i()] * local
+    }
+    /// Body-local direction of the world direction `world`.
+    pub fn body_direction_to_local(&self, body: RigidBodyHandle, world: &Vector3<f64>) -> Vector3<f64> {
+        self.bodies.orientation[body.i()].inverse() * world
+    }
+    /// Velocity of the world point `world_m` moving with the body, m/s.
+    pub fn body_velocity_at(&self, body: RigidBodyHandle, world_m: &Vector3<f64>) -> Vector3<f64> {
+        let b = body.i();
+        self.bodies.velocity[b] + self.bodies.angular_velocity[b].cross(&(world_m - self.bodies.position[b]))
+    }
+
+    /// Move a body: centre of mass to `position_m`, orientation to `orientation` (its mesh
+    /// follows).
+    pub fn set_body_pose(
+        &mut self,
+        body: RigidBodyHandle,
+        position_m: Vector3<f64>,
+        orientation: UnitQuaternion<f64>,
+    ) -> Result<()> {
+        let b = self.check_body(body)?;
+        check_vector(&self.rigid_bodies.labels[b], "position", &position_m)?;
+        self.bodies.position[b] = position_m;
+        self.bodies.orientation[b] = orientation;
+        self.place_rigid_nodes();
+        Ok(())
+    }
+    /// Set the linear velocity of a body's centre of mass, m/s.
+    pub fn set_body_velocity(&mut self, body: RigidBodyHandle, v_m_s: Vector3<f64>) -> Result<()> {
+        let b = self.check_body(body)?;
+        check_vector(&self.rigid_bodies.labels[b], "velocity", &v_m_s)?;
+        self.bodies.velocity[b] = v_m_s;
+        Ok(())
+    }
+    /// Set the angular velocity of a body (world frame), rad/s.
+    pub fn set_body_angular_velocity(&mut self, body: RigidBodyHandle, w_rad_s: Vector3<f64>) -> Result<()> {
+        let b = self.check_body(body)?;
+        check_vector(&self.rigid_bodies.labels[b], "angular velocity", &w_rad_s)?;
+        self.bodies.angular_velocity[b] = w_rad_s;
+        Ok(())
+    }
+    /// Set the external force at the centre of mass (persists until changed), N.
+    pub fn set_body_force(&mut self, body: RigidBodyHandle, force_n: Vector3<f64>) -> Result<()> {
+        let b = self.check_body(body)?;
+        check_vector(&self.rigid_bodies.labels[b], "force", &force_n)?;
+        self.bodies.force[b] = force_n;
+        Ok(())
+    }
+    /// Set the external torque (persists until changed), N·m.
+    pub fn set_body_torque(&mut self, body: RigidBodyHandle, torque_n_m: Vector3<f64>) -> Result<()> {
+        let b = self.check_body(body)?;
+        check_vector(&self.rigid_bodies.labels[b], "torque", &torque_n_m)?;
+        self.bodies.torque[b] = torque_n_m;
+        Ok(())
+    }
+    /// Add a force applied at the world point `at_m`: a force at the centre of mass plus the
+    /// torque `(at − c) × f` (persists until changed).
+    pub fn add_body_force_at(
+        &mut self,
+        body: RigidBodyHandle,
+        force_n: Vector3<f64>,
+        at_m: Vector3<f64>,
+    ) -> Result<()> {
+        let b = self.check_body(body)?;
+        check_vector(&self.rigid_bodies.labels[b], "force", &force_n)?;
+        check_vector(&self.rigid_bodies.labels[b], "force point", &at_m)?;
+        self.bodies.force[b] += force_n;
+        self.bodies.torque[b] += (at_m - self.bodies.position[b]).cross(&force_n);
+        Ok(())
+    }
+    /// Set the external acceleration (added to gravity; persists), m/s².
+    pub fn set_body_acceleration(&mut self, body: RigidBodyHandle, a_m_s2: Vector3<f64>) -> Result<()> {
+        let b = self.check_body(body)?;
+        check_vector(&self.rigid_bodies.labels[b], "acceleration", &a_m_s2)?;
+        self.bodies.acceleration[b] = a_m_s2;
+        Ok(())
+    }
+    /// Set the external angular acceleration (persists), rad/s².
+    pub fn set_body_angular_acceleration(&mut self, body: RigidBodyHandle, a_rad_s2: Vector3<f64>) -> Result<()> {
+        let b = self.check_body(body)?;
+        check_vector(&self.rigid_bodies.labels[b], "angular acceleration", &a_rad_s2)?;
+        self.bodies.angular_acceleration[b] = a_rad_s2;
+        Ok(())
+    }
+    /// Damping and other inertia parameters of a body.
+    pub fn body_params(&self, body: RigidBodyHandle) -> Result<RigidBodyParams> {
+        let b = self.check_body(body)?;
+        Ok(self.rigid_bodies.inertia.params[b])
+    }
+    /// Change the inertia parameters of a body.
+    pub fn set_body_params(&mut self, body: RigidBodyHandle, params: RigidBodyParams) -> Result<()> {
+        let b = self.check_body(body)?;
+        params.validate(&self.rigid_bodies.labels[b])?;
+        self.rigid_bodies.inertia.params[b] = params;
+        Ok(())
+    }
+    /// Change the mass (kg) and body-frame inertia tensor (kg·m²) of a body.
+    pub fn set_body_mass(&mut self, body: RigidBodyHandle, mass_kg: f64, inertia_kg_m2: Matrix3<f64>) -> Result<()> {
+        let b = self.check_body(body)?;
+        let label = self.rigid_bodies.labels[b].clone();
+        if !(mass_kg > 0.0 && mass_kg.is_finite()) || inertia_kg_m2.symmetric_eigenvalues().min() <= 0.0 {
+            return Err(StarkError::InvalidInput(format!(
+                "rigid body '{label}' needs a positive mass and positive definite inertia"
+            )));
+        }
+        self.bodies.mass[b] = mass_kg;
+        self.bodies.inertia_local[b] = inertia_kg_m2;
+        Ok(())
+    }
+
+    /// Put every rigid node at its body's current pose.
+    pub(crate) fn place_rigid_nodes(&mut self) {
+        for i in 0..self.nodes.len() {
+            let b = self.nodes.body[i];
+            if b != NO_BODY {
+                let b = b as usize;
+                self.nodes.x[i] = self.bodies.position[b] + self.bodies.orientation[b] * self.nodes.rest[i];
+            }
+        }
+    }
+}
+
+/// Commit the end-of-step body state: velocities from the solve, pose integrated (DESIGN §2).
+pub(crate) fn commit_bodies(bodies: &mut BodyArrays, v: &[Vector3<f64>], n_nodes: usize, dt: f64) {
+    for b in 0..bodies.len() {
+        let vel = v[crate::state::linear_block(n_nodes, b) as usize];
+        let w = v[crate::state::angular_block(n_nodes, b) as usize];
+        bodies.position[b] += vel * dt;
+        bodies.orientation[b] = integrate_orientation(&bodies.orientation[b], &w, dt);
+        bodies.velocity[b] = vel;
+        bodies.angular_velocity[b] = w;
+    }
+}
