@@ -36,6 +36,8 @@ pub enum Node {
     /// The angular velocity of a body (rad/s) in place of a position: its "position" is `ω` and
     /// its start value `ω0` (velocity controllers are written on it).
     AngularVelocity(u32),
+    /// A fixed point of the world, m (no DOFs): the other side of a joint to the world.
+    World([f64; 3]),
 }
 
 impl Node {
@@ -86,6 +88,7 @@ impl Node {
             Node::AngularVelocity(body) => NodeMap::AngularVelocity {
                 ang: angular_block(n, body as usize),
             },
+            Node::World(_) => NodeMap::Fixed,
         }
     }
 
@@ -96,6 +99,7 @@ impl Node {
             Node::Point(i) => state.x[i as usize],
             Node::Rigid { body, local } => state.poses[body as usize].point(&Vector3::from(local)),
             Node::AngularVelocity(body) => state.body_angular_velocity(body as usize),
+            Node::World(p) => Vector3::from(p),
         }
     }
 
@@ -109,6 +113,7 @@ impl Node {
                 state.bodies.position[b] + state.bodies.orientation[b] * Vector3::from(local)
             }
             Node::AngularVelocity(body) => state.bodies.angular_velocity[body as usize],
+            Node::World(p) => Vector3::from(p),
         }
     }
 

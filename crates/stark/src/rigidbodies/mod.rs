@@ -7,6 +7,7 @@
 //! attachments work on bodies unchanged.
 
 pub mod inertia;
+pub mod joints;
 pub mod mass_properties;
 
 use crate::contact::ContactHandle;
@@ -50,18 +51,29 @@ pub struct RigidMeshHandle {
 }
 
 /// Every rigid-body model of a simulation.
-#[derive(Default)]
 pub struct RigidBodies {
     /// Label of each body.
     pub labels: Vec<String>,
     /// Inertia, gravity, external forces and damping.
     pub inertia: RigidInertia,
+    /// Joints, motors and controllers.
+    pub joints: joints::Joints,
+}
+
+impl Default for RigidBodies {
+    fn default() -> Self {
+        RigidBodies {
+            labels: Vec::new(),
+            inertia: RigidInertia::default(),
+            joints: joints::Joints::new(joints::JointSet::default()),
+        }
+    }
 }
 
 impl RigidBodies {
     /// All terms, for the solver.
     pub fn terms_mut(&mut self) -> Vec<&mut dyn EnergyTerm> {
-        vec![&mut self.inertia]
+        vec![&mut self.inertia, &mut self.joints]
     }
 
     /// The body with this label.
@@ -203,7 +215,7 @@ impl Simulation {
         Ok(RigidMeshHandle { body, nodes, contact })
     }
 
-    fn check_body(&self, body: RigidBodyHandle) -> Result<usize> {
+    pub(crate) fn check_body(&self, body: RigidBodyHandle) -> Result<usize> {
         let i = body.i();
         if i < self.bodies.len() {
             Ok(i)
