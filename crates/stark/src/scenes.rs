@@ -1,12 +1,15 @@
 //! Built-in scenes, including exact replicas of the original Stark's shipped scenes
 //! (`reference/benchmark-scenes.md`) used for validation and benchmarks.
 
+use crate::contact::ContactHandle;
 use crate::deformables::PrescribedParams;
 use crate::error::{Result, StarkError};
 use crate::presets::{meshes, SurfaceMaterial, VolumeMaterial};
+use crate::rigidbodies::joints::JointParams;
+use crate::rigidbodies::{MassProperties, RigidBodyHandle};
 use crate::simulation::Simulation;
 use crate::solver::Settings;
-use nalgebra::Vector3;
+use nalgebra::{UnitQuaternion, Vector3};
 
 /// A built-in scene.
 pub struct BuiltinScene {
@@ -68,6 +71,37 @@ pub fn builtin_scenes() -> Vec<BuiltinScene> {
                 "The original's hello world: 0.4 m cloth (32×32) falls on a spinning, bobbing box (self-contact)",
             duration_s: 301.0 / 30.0,
             build: spinning_box_cloth,
+        },
+        BuiltinScene {
+            name: "spinning_box_cloth_prescribed",
+            description: "spinning_box_cloth with the box as a prescribed (kinematic) surface instead of a rigid body",
+            duration_s: 301.0 / 30.0,
+            build: spinning_box_cloth_prescribed,
+        },
+        BuiltinScene {
+            name: "rb_point",
+            description: "Original Stark scene: a chain of 10 rigid boxes joined by ball joints, the first one fixed",
+            duration_s: 151.0 / 30.0,
+            build: rb_point,
+        },
+        BuiltinScene {
+            name: "deformable_and_rigid_collisions",
+            description: "Original Stark scene: two soft boxes stacked on a fixed rigid floor, friction μ = 1",
+            duration_s: 151.0 / 30.0,
+            build: deformable_and_rigid_collisions,
+        },
+        BuiltinScene {
+            name: "simple_grasp",
+            description:
+                "Original Stark scene: a 1 kg soft cube squeezed by two prismatic-press fingers (5 N each); μ 1.05, then 0.95 from t = 5 s",
+            duration_s: 211.0 / 30.0,
+            build: simple_grasp,
+        },
+        BuiltinScene {
+            name: "boxes_on_cloth",
+            description: "The original's Python example: 24 rigid boxes on a 64×64 cloth on a rigid floor; the cloth edge is lifted and pulled",
+            duration_s: 10.0,
+            build: boxes_on_cloth,
         },
         BuiltinScene {
             name: "twisting_cloth",
@@ -214,11 +248,321 @@ pub fn cloth_on_sphere(mut settings: Settings) -> Result<Simulation> {
 /// `spinning_box_cloth`, the original's hello world (`benchmark-scenes.md` §6): a 0.4 m cotton
 /// cloth (32×32) at z = 0 falls onto a 0.08 m box whose target is translated by
 /// (0, 0, −0.08 − 0.1 sin t) and rotated by 90°·t about z. Contact thickness 2 mm, self-contact
-/// on, no friction, dt = 1/30 s, 301 steps, the original's tolerances. The original drives a rigid
-/// box with a fix constraint; here the box is a kinematic surface (prescribed positions, k = 1e6
-/// N/m) following the same motion.
+/// on, no friction, dt = 1/30 s, 301 steps, the original's tolerances. As in the original, the box
+/// is a 1 kg rigid body driven by a fix joint (k = 1e6 N/m, 1 mm / 1° tolerance).
 pub fn spinning_box_cloth(mut settings: Settings) -> Result<Simulation> {
     settings.name = "spinning_box_cloth".into();
+    settings.time_step_s = 1.0 / 30.0;
+    stark_tolerances(&mut settings);
+    settings.contact.default_thickness_m = Some(0.002);
+    let mut sim = Simulation::new(settings)?;
+    sim.add_surface_grid("cloth", [0.4, 0.4], [32, 32], &SurfaceMaterial::cotton_fabric())?;
+    let (body, _) = rigid_box(
+        &mut sim,
+        "box",
+        1.0,
+        Vector3::repeat(0.08),
+        Vector3::new(0.0, 0.0, -0.08),
+        None,
+    )?;
+    let fix = sim.add_fix_joint("box_drive", body, JointParams::default())?;
+    sim.add_time_event(0.0, f64::INFINITY, move |sim, t| {
+        sim.set_fixed_transform_deg(
+            &fix,
+            Vector3::new(0.0, 0.0, -0.08 - 0.1 * t.sin()),
+            90.0 * t,
+            Vector3::z(),
+        )
+    });
+    Ok(sim)
+}
+
+/// A rigid box of `mass_kg` and side lengths `size` (m), centred at `position` (m), with the
+/// 8-vertex/12-triangle collision mesh of the original's `add_box`.
+pub fn rigid_box(
+    sim: &mut Simulation,
+    label: &str,
+    mass_kg: f64,
+    size: Vector3<f64>,
+    position: Vector3<f64>,
+    thickness_m: Option<f64>,
+) -> Result<(RigidBodyHandle, ContactHandle)> {
+    let props = MassProperties::cuboid(mass_kg, size);
+    let body = sim.add_rigid_body_with(label, &props, position, UnitQuaternion::identity())?;
+    let mesh = meshes::box_mesh(size);
+    let m = sim.add_rigid_collision_mesh(body, &mesh.vertices, &mesh.elements, thickness_m)?;
+    Ok((body, m.contact))
+}
+
+/// `rb_constraints_point` of the original (`examples/rb_constraint_test_scenes.cpp`): ten 0.1 m,
+/// 1 kg boxes in a row along x, box 0 fixed, box i joined to box i − 1 by a ball joint at
+/// (0.05 + 0.1(i − 1), ∓0.05, ∓0.05) (− for odd i, + for even), so the chain folds down under
+/// gravity. No contact; k = 1e6 N/m, tolerance 1 mm; dt = 1/30 s; the original's tolerances.
+pub fn rb_point(mut settings: Settings) -> Result<Simulation> {
+    settings.name = "rb_point".into();
+    settings.time_step_s = 1.0 / 30.0;
+    stark_tolerances(&mut settings);
+    let mut sim = Simulation::new(settings)?;
+    let size = Vector3::repeat(0.1);
+    let props = MassProperties::cuboid(1.0, size);
+    let mut prev = sim.add_rigid_body_with("box0", &props, Vector3::zeros(), UnitQuaternion::identity())?;
+    sim.add_fix_joint("fix", prev, JointParams::default())?;
+    for i in 1..10 {
+        let body = sim.add_rigid_body_with(
+            &format!("box{i}"),
+            &props,
+            Vector3::new(0.1 * i as f64, 0.0, 0.0),
+            UnitQuaternion::identity(),
+        )?;
+        let s = if i % 2 == 1 { -0.05 } else { 0.05 };
+        let p = Vector3::new(0.05 + (i - 1) as f64 * 0.1, s, s);
+        sim.add_ball_joint(&format!("ball{i}"), Some(prev), body, p, JointParams::default())?;
+        prev = body;
+    }
+    Ok(sim)
+}
+
+/// `deformable_and_rigid_collisions` of the original (`examples/main.cpp`): a 0.25 m soft-rubber
+/// box (5³ cells, 1000 kg/m³, E = 1e4 Pa, thickness 0.25 mm) 1 cm above a fixed rigid floor
+/// (2 × 2 × 0.1 m, thickness 2 mm) and a 0.1 m box (2³ cells, 1e4 kg/m³, E = 1e5 Pa, thickness
+/// 0.1 mm) 1 cm above it, offset by (13, 7) mm; μ = 1 for all pairs, ε_v = 0.01 m/s; dt = 1/30 s.
+pub fn deformable_and_rigid_collisions(mut settings: Settings) -> Result<Simulation> {
+    settings.name = "deformable_and_rigid_collisions".into();
+    settings.time_step_s = 1.0 / 30.0;
+    stark_tolerances(&mut settings);
+    settings.contact.friction_stick_slide_threshold_m_s = 0.01;
+    let mut sim = Simulation::new(settings)?;
+    let (d1, d2, gap) = (0.25, 0.1, 0.01);
+    let mut rubber = VolumeMaterial::soft_rubber();
+    rubber.contact_thickness_m = Some(0.001 * d1);
+    rubber.inertia.density = 1e3;
+    let mut m1 = meshes::tet_grid(Vector3::zeros(), Vector3::repeat(d1), [5, 5, 5]);
+    m1.vertices.iter_mut().for_each(|v| v.z += 0.5 * d1 + gap);
+    let a = sim.add_volume("box_a", &m1.vertices, &m1.elements, &rubber)?;
+    rubber.contact_thickness_m = Some(0.001 * d2);
+    rubber.inertia.density = 1e4;
+    rubber.strain.youngs_modulus = 1e5;
+    let mut m2 = meshes::tet_grid(Vector3::zeros(), Vector3::repeat(d2), [2, 2, 2]);
+    let shift = Vector3::new(0.13 * d2, 0.07 * d2, d1 + 0.5 * d2 + 2.0 * gap);
+    m2.vertices.iter_mut().for_each(|v| *v += shift);
+    let b = sim.add_volume("box_b", &m2.vertices, &m2.elements, &rubber)?;
+    let d3 = 2.0;
+    let (floor, floor_contact) = rigid_box(
+        &mut sim,
+        "floor",
+        1.0,
+        Vector3::new(d3, d3, 0.05 * d3),
+        Vector3::new(0.0, 0.0, -0.025 * d3),
+        Some(0.001 * d3),
+    )?;
+    sim.add_fix_joint("floor_fix", floor, JointParams::default())?;
+    let (ca, cb) = (a.contact.expect("thickness"), b.contact.expect("thickness"));
+    for (x, y) in [(floor_contact, ca), (floor_contact, cb), (ca, cb)] {
+        sim.contact.set_friction(x, y, 1.0)?;
+    }
+    Ok(sim)
+}
+
+/// `simple_grasp` of the original (`examples/main.cpp`): a 0.2 m soft cube (5³ cells, 1 kg,
+/// E = 2e3 Pa, elasticity only) between two rigid fingers (0.1 × 0.4 × 0.4 m, 1 kg) on a fixed
+/// rigid hand (0.6 m cube); each finger is a prismatic press on the hand along x driven at 1 m/s
+/// toward the cube with at most 5 N. No gravity until it ramps linearly to −10 m/s² over
+/// t = 2–3 s. Finger friction μ = 1.05 (holds: 2 × 5 N × 1.05 > 10 N), 0.95 from t = 5 s
+/// (slides). Thickness 1 mm, ε_v = 1e-3 m/s, dt = 1/30 s.
+pub fn simple_grasp(settings: Settings) -> Result<Simulation> {
+    simple_grasp_with(settings, 1.05, 0.95, 5.0)
+}
+
+/// [`simple_grasp`] with the friction `mu_hold` before and `mu_slide` from `slide_from_s`.
+pub fn simple_grasp_with(mut settings: Settings, mu_hold: f64, mu_slide: f64, slide_from_s: f64) -> Result<Simulation> {
+    settings.name = "simple_grasp".into();
+    settings.time_step_s = 1.0 / 30.0;
+    settings.gravity_m_s2 = [0.0; 3];
+    stark_tolerances(&mut settings);
+    settings.contact.default_thickness_m = Some(0.001);
+    settings.contact.friction_stick_slide_threshold_m_s = 1e-3;
+    let mut sim = Simulation::new(settings)?;
+    let (d, gap, mass, pressure_n) = (0.2, 0.02, 1.0, 10.0);
+    let hd = d / 2.0;
+    let mut rubber = VolumeMaterial::soft_rubber();
+    rubber.inertia.density = mass / (d * d * d);
+    rubber.strain.youngs_modulus = 2e3;
+    rubber.strain.strain_limit = f64::INFINITY;
+    rubber.strain.damping = 0.0;
+    let object = sim.add_volume_grid("object", [d, d, d], [5, 5, 5], &rubber)?;
+    let object_contact = object.contact.expect("default thickness");
+    let (hand, hand_contact) = rigid_box(
+        &mut sim,
+        "hand",
+        mass,
+        Vector3::repeat(3.0 * d),
+        Vector3::new(0.0, -(3.0 * hd + hd + gap), 0.0),
+        None,
+    )?;
+    let finger_size = Vector3::new(0.5 * d, 2.0 * d, 2.0 * d);
+    let x = hd + 0.5 * hd + gap;
+    let (left, left_contact) = rigid_box(
+        &mut sim,
+        "left_finger",
+        mass,
+        finger_size,
+        Vector3::new(-x, -gap, 0.0),
+        None,
+    )?;
+    let (right, right_contact) = rigid_box(
+        &mut sim,
+        "right_finger",
+        mass,
+        finger_size,
+        Vector3::new(x, -gap, 0.0),
+        None,
+    )?;
+    sim.contact.disable_collision(hand_contact, left_contact)?;
+    sim.contact.disable_collision(hand_contact, right_contact)?;
+    sim.add_fix_joint("hand_fix", hand, JointParams::default())?;
+    let params = JointParams::default();
+    let f = 0.5 * pressure_n;
+    sim.add_prismatic_press(
+        "left_press",
+        Some(hand),
+        left,
+        Vector3::zeros(),
+        Vector3::x(),
+        1.0,
+        f,
+        0.01,
+        params,
+    )?;
+    sim.add_prismatic_press(
+        "right_press",
+        Some(hand),
+        right,
+        Vector3::zeros(),
+        Vector3::x(),
+        -1.0,
+        f,
+        0.01,
+        params,
+    )?;
+    sim.contact.set_friction(left_contact, object_contact, mu_hold)?;
+    sim.contact.set_friction(right_contact, object_contact, mu_hold)?;
+    sim.add_time_event(2.0, 3.0, |sim, t| {
+        sim.set_gravity(Vector3::new(0.0, 0.0, -10.0 * (t - 2.0)));
+        Ok(())
+    });
+    sim.add_time_event(3.0, f64::INFINITY, |sim, _| {
+        sim.set_gravity(Vector3::new(0.0, 0.0, -10.0));
+        Ok(())
+    });
+    sim.add_time_event(slide_from_s, f64::INFINITY, move |sim, _| {
+        sim.contact.set_friction(left_contact, object_contact, mu_slide)?;
+        sim.contact.set_friction(right_contact, object_contact, mu_slide)
+    });
+    Ok(sim)
+}
+
+/// Stark's `blend(.., EaseInOut)`: cubic ease in and out from 0 to 1 over `[0, 1]`.
+fn ease_in_out(t: f64) -> f64 {
+    let t = t.clamp(0.0, 1.0);
+    if t < 0.5 {
+        4.0 * t * t * t
+    } else {
+        1.0 - (2.0 - 2.0 * t).powi(3) / 2.0
+    }
+}
+
+/// `boxes_on_cloth` of the original's Python examples: a 0.5 m cotton cloth (64×64, strain-limit
+/// stiffness 1e7, inertial damping 1/s, strain damping 10) lies on a fixed rigid floor
+/// (1 × 10 × 0.05 m); 24 rigid 0.08 m, 1 kg boxes stand on it in 8 layers of 3. Gravity ramps to
+/// −9.81 m/s² over the first second, then the cloth's edge y = 0.25 is lifted 0.1 m (1–2 s,
+/// ease in-out) and pulled 1 m along y (2–10 s). μ = 0.5 everywhere, thickness 0.5 mm,
+/// ε_v = 0.01 m/s; dt = 1/30 s; residual 1e-6 (the original's step tolerance is 1e-6 m/s).
+pub fn boxes_on_cloth(mut settings: Settings) -> Result<Simulation> {
+    settings.name = "boxes_on_cloth".into();
+    settings.time_step_s = 1.0 / 30.0;
+    settings.gravity_m_s2 = [0.0; 3];
+    settings.newton.residual_tolerance_n = 1e-6 / settings.time_step_s;
+    settings.newton.step_tolerance_m_s = 1e-6;
+    let thickness = 0.0005;
+    settings.contact.default_thickness_m = Some(thickness);
+    settings.contact.friction_stick_slide_threshold_m_s = 0.01;
+    let mut sim = Simulation::new(settings)?;
+    let (floor, floor_contact) = rigid_box(
+        &mut sim,
+        "floor",
+        1.0,
+        Vector3::new(1.0, 10.0, 0.05),
+        Vector3::new(0.0, 4.0, -0.05 / 2.0 - thickness),
+        None,
+    )?;
+    let fix = sim.add_fix_joint("floor_fix", floor, JointParams::default())?;
+    sim.set_joint_stiffness(&fix, 1e8)?;
+    let mut cotton = SurfaceMaterial::cotton_fabric();
+    cotton.strain.strain_limit_stiffness = 1e7;
+    cotton.inertia.damping = 1.0;
+    cotton.strain.damping = 10.0;
+    let s = 0.5;
+    let mut grid = meshes::triangle_grid([0.0, 0.0], [s, s], [64, 64], 0.0);
+    grid.vertices.iter_mut().for_each(|v| v.z += 2.0 * thickness);
+    let cloth = sim.add_surface("cloth", &grid.vertices, &grid.elements, &cotton)?;
+    let cloth_contact = cloth.contact.expect("default thickness");
+    sim.contact.set_friction(floor_contact, cloth_contact, 0.5)?;
+    let edge = sim.prescribe_in_box(
+        cloth.nodes,
+        Vector3::new(0.0, s / 2.0, 2.0 * thickness),
+        Vector3::new(s, 0.001, s),
+        PrescribedParams::default(),
+    )?;
+    let (mu, side) = (0.5, 0.08);
+    let box_height = side + 2.0 * thickness;
+    let box_base = side / 2.0 + 3.0 * thickness;
+    let mut boxes: Vec<ContactHandle> = Vec::new();
+    for i in 0..8 {
+        for j in 0..3 {
+            let y = if j == 1 { -side } else { -1.5 * side };
+            let position = Vector3::new(
+                -box_height / 2.0 + j as f64 * box_height,
+                y,
+                box_base + i as f64 * box_height,
+            );
+            let (_, c) = rigid_box(
+                &mut sim,
+                &format!("box{}", 3 * i + j),
+                1.0,
+                Vector3::repeat(side),
+                position,
+                None,
+            )?;
+            sim.contact.set_friction(c, cloth_contact, mu)?;
+            sim.contact.set_friction(c, floor_contact, mu)?;
+            for &other in &boxes {
+                sim.contact.set_friction(c, other, mu)?;
+            }
+            boxes.push(c);
+        }
+    }
+    let (lift_start, pull_start) = (1.0, 2.0);
+    sim.add_time_event(0.0, lift_start, move |sim, t| {
+        sim.set_gravity(Vector3::new(0.0, 0.0, -9.81 * t / lift_start));
+        Ok(())
+    });
+    sim.add_time_event(lift_start, f64::INFINITY, move |sim, t| {
+        sim.set_gravity(Vector3::new(0.0, 0.0, -9.81));
+        let lift = 0.1 * ease_in_out((t - lift_start) / (pull_start - lift_start));
+        let pull = if t > pull_start { (t - pull_start) / 8.0 } else { 0.0 };
+        sim.deformables.prescribed.set_transform(
+            edge,
+            Vector3::new(0.0, pull.min(1.0), lift),
+            nalgebra::Rotation3::identity(),
+        )
+    });
+    Ok(sim)
+}
+
+/// `spinning_box_cloth` with the box as a prescribed surface: a kinematic obstacle following the
+/// same motion (the previous form of the scene, before rigid bodies).
+pub fn spinning_box_cloth_prescribed(mut settings: Settings) -> Result<Simulation> {
+    settings.name = "spinning_box_cloth_prescribed".into();
     settings.time_step_s = 1.0 / 30.0;
     stark_tolerances(&mut settings);
     settings.contact.default_thickness_m = Some(0.002);

@@ -12,7 +12,7 @@ pub mod pairs;
 pub use barrier::BarrierKind;
 
 use crate::deformables::NodeSetHandle;
-use crate::energy::kinematics::{element_blocks, map_element, NodeMap};
+use crate::energy::kinematics::{element_blocks, map_element, MapProjection, NodeMap};
 use crate::energy::term::{element_stride, NO_DOF};
 use crate::energy::Node;
 use crate::energy::{EnergyTerm, EvalMode, HyperDual, Scalar, StepCheck, Vec3};
@@ -946,8 +946,12 @@ impl EnergyTerm for Contact {
             };
             // Through the kinematic map; the position-space Hessian is already positive
             // semi-definite, the rotation's second-order term may not be.
-            let project = self.settings.hessian != PairHessian::Exact;
-            map_element(&node_maps(&nodes, state), &d, state.dt, 5, project, out);
+            let projection = if self.settings.hessian == PairHessian::Exact {
+                MapProjection::None
+            } else {
+                MapProjection::SecondOrderOnly
+            };
+            map_element(&node_maps(&nodes, state), &d, state.dt, 5, projection, out);
         }
     }
     fn before_step(&mut self, state: &EvalState) {

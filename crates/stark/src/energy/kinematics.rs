@@ -169,16 +169,28 @@ pub fn count_blocks(maps: &[NodeMap]) -> usize {
     element_blocks(maps, &mut buf[..(2 * maps.len()).min(16)])
 }
 
+/// How [`map_element`] makes the DOF Hessian positive semi-definite.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MapProjection {
+    /// Keep the exact Hessian.
+    None,
+    /// Project the whole DOF Hessian (including the second-order rotation terms).
+    Full,
+    /// The position-space Hessian is already positive semi-definite, so `JᵀHJ` is too: project
+    /// only each body's 3×3 second-order rotation term (cheap; a sum of PSD parts is PSD).
+    SecondOrderOnly,
+}
+
 /// Map position-space derivatives of an element (value, gradient and full Hessian of `d`) to its
 /// DOF blocks (see [`element_blocks`]), writing the solver layout of
-/// [`element_stride`](super::term::element_stride)`(width)` into `out`. With `project`, the DOF
-/// Hessian (including the second-order rigid terms) is projected to positive semi-definite.
+/// [`element_stride`](super::term::element_stride)`(width)` into `out`, with the Hessian made
+/// positive semi-definite as `projection` says.
 pub fn map_element<const N: usize>(
     maps: &[NodeMap; N],
     d: &HyperDual<N>,
     dt: f64,
     width: usize,
-    project: bool,
+    projection: MapProjection,
     out: &mut [f64],
 ) {
     let mut blocks = [NO_DOF; 16];
@@ -194,6 +206,7 @@ pub fn map_element<const N: usize>(
         NodeMap::Fixed => [(usize::MAX, eye), (usize::MAX, eye)],
     });
     let n = 3 * m;
+    let mut second = [[0.0; 9]; 16];
     let mut g = [0.0; 48];
     let mut h = [0.0; 48 * 48];
     for a in 0..N {
@@ -232,12 +245,25 @@ pub fn map_element<const N: usize>(
             let s = slot(ang);
             for k in 0..3 {
                 for l in 0..3 {
-                    h[(3 * s + k) * n + 3 * s + l] += ga.dot(&(pose.d2r[k][l] * local));
+                    second[s][3 * k + l] += ga.dot(&(pose.d2r[k][l] * local));
                 }
             }
         }
     }
-    if project {
+    for (s, block) in second.iter_mut().enumerate().take(m) {
+        if block.iter().all(|&v| v == 0.0) {
+            continue;
+        }
+        if projection == MapProjection::SecondOrderOnly {
+            project_psd(block, 3);
+        }
+        for k in 0..3 {
+            for l in 0..3 {
+                h[(3 * s + k) * n + 3 * s + l] += block[3 * k + l];
+            }
+        }
+    }
+    if projection == MapProjection::Full {
         project_psd(&mut h[..n * n], n);
     }
     out.iter_mut().for_each(|o| *o = 0.0);
@@ -341,7 +367,7 @@ mod tests {
         ];
         let width = 3;
         let mut out = vec![0.0; crate::energy::term::element_stride(width)];
-        map_element(&maps, &d, dt, width, false, &mut out);
+        map_element(&maps, &d, dt, width, MapProjection::None, &mut out);
         let h = 1e-6;
         for i in 0..9 {
             let mut up = u;
@@ -381,7 +407,7 @@ mod tests {
                 NodeMap::Free { block: 2 },
             ];
             let mut out = vec![0.0; crate::energy::term::element_stride(3)];
-            map_element(&maps, &d, dt, 3, false, &mut out);
+            map_element(&maps, &d, dt, 3, MapProjection::None, &mut out);
             out[1..10].to_vec()
         };
         let base = 1 + 3 * width;

@@ -8,7 +8,7 @@
 //! and writes them in DOF space.
 
 use super::dual::HyperDual;
-use super::kinematics::{count_blocks, element_blocks, map_element, NodeMap};
+use super::kinematics::{count_blocks, element_blocks, map_element, MapProjection, NodeMap};
 use super::psd::project_psd;
 use super::scalar::Scalar;
 use super::tensor::Vec3;
@@ -404,7 +404,12 @@ impl<P: Potential<N>, const N: usize> EnergyTerm for PotentialTerm<P, N> {
             // second-order rotation term belongs in the Hessian before projection, DESIGN §2).
             d = dual_derivatives(&self.potential, e, &stencil);
             let maps: [NodeMap; N] = stencil.nodes.map(|node| node.map(state));
-            map_element(&maps, &d, dt, width_of_stride(o.len()), project, o);
+            let projection = if project {
+                MapProjection::Full
+            } else {
+                MapProjection::None
+            };
+            map_element(&maps, &d, dt, width_of_stride(o.len()), projection, o);
             return;
         }
         let projected = element_derivatives(&self.potential, e, &stencil, project, &mut d);

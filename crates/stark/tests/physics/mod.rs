@@ -5,6 +5,7 @@ pub mod cantilever_matches_linear_elasticity;
 pub mod contact_scenes_never_intersect;
 pub mod default_scene_converges_to_tolerance;
 pub mod free_fall_matches_backward_euler;
+pub mod grasp_slips_at_mu_f;
 pub mod incline_friction;
 pub mod pendulum_period;
 pub mod quasistatic_stretch_converges;
