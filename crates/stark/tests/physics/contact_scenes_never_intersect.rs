@@ -10,7 +10,19 @@ use stark::scenes::find_scene;
 use stark::{Settings, Simulation};
 
 /// Runs a built-in scene for `duration_s`, checking every accepted state; returns the simulation.
-fn run_checked(name: &str, duration_s: f64, mut each_step: impl FnMut(&Simulation)) -> Simulation {
+fn run_checked(name: &str, duration_s: f64, each_step: impl FnMut(&Simulation)) -> Simulation {
+    run_checked_allowing_inversion(name, duration_s, 0, each_step).0
+}
+
+/// [`run_checked`] allowing up to `max_inverted` inverted tets in a step (a material crushed
+/// beyond inversion, which Stable Neo-Hookean permits); returns the most seen.
+fn run_checked_allowing_inversion(
+    name: &str,
+    duration_s: f64,
+    max_inverted: usize,
+    mut each_step: impl FnMut(&Simulation),
+) -> (Simulation, usize) {
+    let mut most_inverted = 0;
     let scene = find_scene(name).unwrap();
     let mut settings = Settings::default();
     settings.output.frames = false;
@@ -29,9 +41,9 @@ fn run_checked(name: &str, duration_s: f64, mut each_step: impl FnMut(&Simulatio
             &crossings[..crossings.len().min(5)]
         );
         let inverted = sim.deformables.tets.potential.count_inverted(&sim.nodes.x);
-        assert_eq!(
-            inverted,
-            0,
+        most_inverted = most_inverted.max(inverted);
+        assert!(
+            inverted <= max_inverted,
             "{name}: {inverted} inverted tets at t = {:.4} s",
             sim.time()
         );
@@ -45,7 +57,7 @@ fn run_checked(name: &str, duration_s: f64, mut each_step: impl FnMut(&Simulatio
         s.steps, s.newton_iterations, s.failed_steps
     );
     assert!(max_pairs > 0, "{name}: contact never became active");
-    sim
+    (sim, most_inverted)
 }
 
 fn bounds(x: &[Vector3<f64>]) -> (Vector3<f64>, Vector3<f64>, Vector3<f64>) {
@@ -151,4 +163,75 @@ fn tunneling_cube_is_stopped_by_the_cloth() {
     });
     let v = sim.nodes.v[cloth_nodes..].iter().sum::<Vector3<f64>>() / (sim.nodes.x.len() - cloth_nodes) as f64;
     println!("tunneling: cube velocity at 0.5 s {v:?} (was 50 m/s down)");
+}
+
+#[test]
+fn deformable_and_rigid_collisions_come_to_rest_on_the_rigid_floor() {
+    // Box B (10 kg) lands corner-first on box A, the original's soft rubber (E = 1e4 Pa): the
+    // load under its corner, ~1e4 Pa spread over a few 5 cm cells, crushes up to 5 tets of box A
+    // beyond inversion for about half a second (t ≈ 0.77–1.4 s, also with Newton converged to
+    // 1e-6 N: it is the material, not the solver). Stable Neo-Hookean, the original's model, is
+    // defined there and pushes them back; all have recovered at the end.
+    let (sim, inverted) = run_checked_allowing_inversion("deformable_and_rigid_collisions", 151.0 / 30.0, 8, |_| {});
+    assert_eq!(sim.deformables.tets.potential.count_inverted(&sim.nodes.x), 0);
+    println!("deformable_and_rigid_collisions: at most {inverted} inverted tets in a step (transient)");
+    let a = sim.deformables.set_by_label("box_a").unwrap();
+    let b = sim.deformables.set_by_label("box_b").unwrap();
+    let (lo_a, hi_a, _) = bounds(sim.positions(a));
+    let (lo_b, _, c_b) = bounds(sim.positions(b));
+    let speed = sim
+        .velocities(a)
+        .iter()
+        .chain(sim.velocities(b))
+        .map(|v| v.norm())
+        .fold(0.0, f64::max);
+    let floor = sim.rigid_bodies.by_label("floor").unwrap();
+    // The floor is held by a fix joint (k = 1e6 N/m, 1 mm tolerance): it sinks ~0.25 mm under
+    // the 25 kg it carries.
+    let floor_top = sim.body_position(floor).z + 0.05;
+    println!(
+        "deformable_and_rigid_collisions at 5.03 s: floor top {floor_top:.5}, box A z [{:.5}, {:.4}], \
+         box B bottom {:.5}, centroid {:?}, max speed {speed:.2e} m/s",
+        lo_a.z, hi_a.z, lo_b.z, c_b
+    );
+    // Box B sinks deep into the soft box A (E = 1e4 Pa under 10 kg), tips and is thrown off it
+    // (~0.3 m sideways); both end up resting on the floor, within their contact distances of it.
+    assert!(floor_top.abs() < 1e-3, "the fixed floor moved by {floor_top}");
+    for (name, lo) in [("A", lo_a.z), ("B", lo_b.z)] {
+        assert!(
+            lo > floor_top && lo < floor_top + 0.003,
+            "box {name} bottom at {lo}, floor top {floor_top}"
+        );
+    }
+    assert!(speed < 0.05, "still moving at {speed} m/s");
+}
+
+#[test]
+fn boxes_on_cloth_settle_and_lift_without_intersection() {
+    // The first 1.5 s: gravity ramps up over 1 s, then the cloth edge starts to lift. (The whole
+    // 10 s scene runs in `stark bench`.)
+    let sim = run_checked("boxes_on_cloth", 1.5, |_| {});
+    let lowest_box = (0..sim.num_rigid_bodies())
+        .map(|b| stark::rigidbodies::RigidBodyHandle { index: b as u32 })
+        .filter(|&b| sim.rigid_bodies.labels[b.i()].starts_with("box"))
+        .map(|b| sim.body_position(b).z)
+        .fold(f64::INFINITY, f64::min);
+    let cloth = sim.deformables.set_by_label("cloth").unwrap();
+    let (lo, _, _) = bounds(sim.positions(cloth));
+    let floor = sim.rigid_bodies.by_label("floor").unwrap();
+    let floor_top = sim.body_position(floor).z + 0.025;
+    println!(
+        "boxes_on_cloth at 1.5 s: lowest box centre {lowest_box:.4} m, cloth bottom {:.6} m, floor top {floor_top:.6} m",
+        lo.z
+    );
+    // The bottom boxes (centre 0.04 m above the cloth) stand on the cloth on the floor.
+    assert!(
+        lowest_box > 0.035 && lowest_box < 0.045,
+        "lowest box centre at {lowest_box}"
+    );
+    assert!(
+        lo.z > floor_top,
+        "the cloth went below the floor top: {} < {floor_top}",
+        lo.z
+    );
 }

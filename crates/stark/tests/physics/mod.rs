@@ -9,5 +9,6 @@ pub mod grasp_slips_at_mu_f;
 pub mod incline_friction;
 pub mod pendulum_period;
 pub mod quasistatic_stretch_converges;
+pub mod rb_point_chain_holds_its_joints;
 pub mod results_are_deterministic;
 pub mod stark_replicas_match_reference;
