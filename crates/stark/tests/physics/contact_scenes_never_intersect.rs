@@ -217,21 +217,19 @@ fn boxes_on_cloth_settle_and_lift_without_intersection() {
         .map(|b| sim.body_position(b).z)
         .fold(f64::INFINITY, f64::min);
     let cloth = sim.deformables.set_by_label("cloth").unwrap();
-    let (lo, _, _) = bounds(sim.positions(cloth));
     let floor = sim.rigid_bodies.by_label("floor").unwrap();
-    let floor_top = sim.body_position(floor).z + 0.025;
-    println!(
-        "boxes_on_cloth at 1.5 s: lowest box centre {lowest_box:.4} m, cloth bottom {:.6} m, floor top {floor_top:.6} m",
-        lo.z
-    );
+    // Height of each cloth node above the floor's top face, in the floor's frame (the fixed floor,
+    // 10 m long and loaded near one end, tilts by ~1e-5 rad on its fix joint).
+    let clearance = sim
+        .positions(cloth)
+        .iter()
+        .map(|p| sim.body_point_to_local(floor, p).z - 0.025)
+        .fold(f64::INFINITY, f64::min);
+    println!("boxes_on_cloth at 1.5 s: lowest box centre {lowest_box:.4} m, cloth clearance over the floor {clearance:.2e} m");
     // The bottom boxes (centre 0.04 m above the cloth) stand on the cloth on the floor.
     assert!(
         lowest_box > 0.035 && lowest_box < 0.045,
         "lowest box centre at {lowest_box}"
     );
-    assert!(
-        lo.z > floor_top,
-        "the cloth went below the floor top: {} < {floor_top}",
-        lo.z
-    );
+    assert!(clearance > 0.0, "the cloth went below the floor top: {clearance}");
 }
