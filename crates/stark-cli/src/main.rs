@@ -183,6 +183,9 @@ fn original_wall_s(scene: &str) -> Option<f64> {
         "hanging_deformable_box" => Some(11.6),
         "spinning_box_cloth" => Some(190.0),
         "twisting_cloth" => Some(38.1),
+        "rb_point" => Some(0.25),
+        "deformable_and_rigid_collisions" => Some(3.1),
+        "simple_grasp" => Some(3.0),
         _ => None,
     }
 }
@@ -194,6 +197,9 @@ fn bench(scenes: Vec<String>, threads: Vec<usize>, json: Option<PathBuf>) -> sta
             "hanging_deformable_box".into(),
             "hanging_cloth_64".into(),
             "hanging_cloth_128".into(),
+            "rb_point".into(),
+            "deformable_and_rigid_collisions".into(),
+            "simple_grasp".into(),
             "spinning_box_cloth".into(),
             "twisting_cloth".into(),
             "twisting_cloth_64".into(),

@@ -32,6 +32,10 @@ const CHUNK: usize = 128;
 /// Layout of one term.
 #[derive(Default)]
 struct TermLayout {
+    /// (topology version, elements, width) the layout was built for.
+    key: Option<(u64, usize, usize)>,
+    /// The term's block pairs `(row, column)`, sorted and deduplicated.
+    pairs: Vec<(u32, u32)>,
     width: usize,
     /// DOF blocks of each element (`width` each).
     stencils: Vec<u32>,
@@ -77,6 +81,32 @@ pub struct Assembler {
     pub timing: (f64, f64),
 }
 
+/// Merge two sorted, deduplicated lists into one.
+fn merge_sorted(a: &[(u32, u32)], b: &[(u32, u32)]) -> Vec<(u32, u32)> {
+    let mut out = Vec::with_capacity(a.len() + b.len());
+    let (mut i, mut j) = (0, 0);
+    while i < a.len() && j < b.len() {
+        match a[i].cmp(&b[j]) {
+            std::cmp::Ordering::Less => {
+                out.push(a[i]);
+                i += 1;
+            }
+            std::cmp::Ordering::Greater => {
+                out.push(b[j]);
+                j += 1;
+            }
+            std::cmp::Ordering::Equal => {
+                out.push(a[i]);
+                i += 1;
+                j += 1;
+            }
+        }
+    }
+    out.extend_from_slice(&a[i..]);
+    out.extend_from_slice(&b[j..]);
+    out
+}
+
 fn slot_of(matrix: &BlockSparseMatrix, r: u32, c: u32) -> u32 {
     let row = matrix.row_start[r as usize]..matrix.row_start[r as usize + 1];
     let k = matrix.cols[row.clone()].binary_search(&c).expect("block in pattern");
@@ -95,13 +125,24 @@ impl Assembler {
         if self.key.as_ref() == Some(&key) {
             return;
         }
-        // Stencils and the block pattern.
-        let mut pairs: Vec<(u32, u32)> = (0..n_blocks as u32).map(|b| (b, b)).collect();
-        self.layouts.clear();
-        for t in terms {
-            let m = t.stencil_width(state);
+        // Stencils and block pairs, rebuilt only for terms whose topology changed (contact
+        // changes often; the elastic terms never do).
+        // Body DOF blocks follow the node blocks: a new node count moves them.
+        if self.key.as_ref().map(|k| k.1) != Some(n_blocks) || self.layouts.len() != terms.len() {
+            self.layouts.clear();
+        }
+        self.layouts.resize_with(terms.len(), TermLayout::default);
+        let mut changed = vec![false; terms.len()];
+        for ((layout, t), changed) in self.layouts.iter_mut().zip(terms).zip(changed.iter_mut()) {
+            let term_key = (t.topology_version(), t.num_elements(), t.stencil_width(state));
+            if layout.key == Some(term_key) {
+                continue;
+            }
+            *changed = true;
+            let m = term_key.2;
             let mut stencils = vec![NO_DOF; t.num_elements() * m];
             t.write_stencils(state, &mut stencils);
+            let mut pairs: Vec<(u32, u32)> = Vec::new();
             for st in stencils.chunks_exact(m.max(1)) {
                 for &r in st.iter().filter(|&&r| r != NO_DOF) {
                     for &c in st.iter().filter(|&&c| c != NO_DOF) {
@@ -109,35 +150,48 @@ impl Assembler {
                     }
                 }
             }
-            self.layouts.push(TermLayout {
+            pairs.par_sort_unstable();
+            pairs.dedup();
+            *layout = TermLayout {
+                key: Some(term_key),
+                pairs,
                 width: m,
                 stencils,
                 ..Default::default()
-            });
+            };
         }
-        pairs.par_sort_unstable();
-        pairs.dedup();
+        // Merge the sorted pair lists of all terms and the diagonal.
+        let mut pairs: Vec<(u32, u32)> = (0..n_blocks as u32).map(|b| (b, b)).collect();
+        for layout in &self.layouts {
+            pairs = merge_sorted(&pairs, &layout.pairs);
+        }
         let matrix = BlockSparseMatrix::from_sorted_pairs(n_blocks, &pairs);
+        let same_pattern = matrix.row_start == self.matrix.row_start && matrix.cols == self.matrix.cols;
 
-        // Slot maps and colours.
-        for (layout, t) in self.layouts.iter_mut().zip(terms) {
+        // Slot maps (when the pattern or the term changed) and colours (when the term changed).
+        for ((layout, t), &changed) in self.layouts.iter_mut().zip(terms).zip(&changed) {
             let m = layout.width;
             let n = t.num_elements();
-            layout.slots = vec![NO_SLOT; n * m * m];
-            layout.energies = vec![0.0; n];
-            let mut used = vec![0u64; n_blocks];
-            let mut colors: Vec<Vec<(u32, u32)>> = Vec::new();
-            layout.serial.clear();
-            for e in 0..n {
-                let st = &layout.stencils[e * m..(e + 1) * m];
-                for a in 0..m {
-                    for b in 0..m {
-                        if st[a] != NO_DOF && st[b] != NO_DOF && st[a] <= st[b] {
-                            layout.slots[(e * m + a) * m + b] = slot_of(&matrix, st[a], st[b]);
+            if changed || !same_pattern {
+                layout.slots = vec![NO_SLOT; n * m * m];
+                for e in 0..n {
+                    let st = &layout.stencils[e * m..(e + 1) * m];
+                    for a in 0..m {
+                        for b in 0..m {
+                            if st[a] != NO_DOF && st[b] != NO_DOF && st[a] <= st[b] {
+                                layout.slots[(e * m + a) * m + b] = slot_of(&matrix, st[a], st[b]);
+                            }
                         }
                     }
                 }
             }
+            if !changed {
+                continue;
+            }
+            layout.energies = vec![0.0; n];
+            let mut used = vec![0u64; n_blocks];
+            let mut colors: Vec<Vec<(u32, u32)>> = Vec::new();
+            layout.serial.clear();
             for start in (0..n).step_by(CHUNK) {
                 let end = (start + CHUNK).min(n);
                 let blocks = layout.stencils[start * m..end * m].iter().filter(|&&r| r != NO_DOF);
@@ -163,7 +217,6 @@ impl Assembler {
             .map(|&(r, c)| (r > c).then(|| slot_of(&matrix, c, r)))
             .collect();
 
-        let same_pattern = matrix.row_start == self.matrix.row_start && matrix.cols == self.matrix.cols;
         if !same_pattern || self.pattern_id == 0 {
             self.pattern_id = NEXT_PATTERN_ID.fetch_add(1, Ordering::Relaxed);
         }
