@@ -6,6 +6,7 @@
 //! body-fixed points ([`Node::Rigid`](crate::energy::Node::Rigid)), so contact, friction and
 //! attachments work on bodies unchanged.
 
+pub mod attachments;
 pub mod inertia;
 pub mod joints;
 pub mod mass_properties;
@@ -58,6 +59,8 @@ pub struct RigidBodies {
     pub inertia: RigidInertia,
     /// Joints, motors and controllers.
     pub joints: joints::Joints,
+    /// Deformable nodes glued to bodies.
+    pub attachments: crate::energy::PotentialTerm<attachments::RigidAttachmentSet, 2>,
 }
 
 impl Default for RigidBodies {
@@ -66,6 +69,7 @@ impl Default for RigidBodies {
             labels: Vec::new(),
             inertia: RigidInertia::default(),
             joints: joints::Joints::new(joints::JointSet::default()),
+            attachments: crate::energy::PotentialTerm::new(attachments::RigidAttachmentSet::default()),
         }
     }
 }
@@ -73,7 +77,7 @@ impl Default for RigidBodies {
 impl RigidBodies {
     /// All terms, for the solver.
     pub fn terms_mut(&mut self) -> Vec<&mut dyn EnergyTerm> {
-        vec![&mut self.inertia, &mut self.joints]
+        vec![&mut self.inertia, &mut self.joints, &mut self.attachments]
     }
 
     /// The body with this label.

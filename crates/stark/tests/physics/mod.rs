@@ -11,4 +11,5 @@ pub mod pendulum_period;
 pub mod quasistatic_stretch_converges;
 pub mod rb_point_chain_holds_its_joints;
 pub mod results_are_deterministic;
+pub mod rigid_attachment_carries_the_cloth;
 pub mod stark_replicas_match_reference;
