@@ -193,7 +193,7 @@ pub fn map_element<const N: usize>(
     projection: MapProjection,
     out: &mut [f64],
 ) {
-    let mut blocks = [NO_DOF; 16];
+    let mut blocks = [NO_DOF; 8];
     let m = element_blocks(maps, &mut blocks[..2 * N]);
     debug_assert!(m <= width);
     let slot = |b: u32| blocks[..m].iter().position(|&x| x == b).expect("block of the element");
@@ -206,9 +206,11 @@ pub fn map_element<const N: usize>(
         NodeMap::Fixed => [(usize::MAX, eye), (usize::MAX, eye)],
     });
     let n = 3 * m;
-    let mut second = [[0.0; 9]; 16];
-    let mut g = [0.0; 48];
-    let mut h = [0.0; 48 * 48];
+    // At most 2 blocks per node and 4 nodes: 8 blocks, 24 DOFs.
+    debug_assert!(m <= 8, "elements of more than 4 nodes are not mapped");
+    let mut second = [[0.0; 9]; 8];
+    let mut g = [0.0; 24];
+    let mut h = [0.0; 24 * 24];
     for a in 0..N {
         let ga = Vector3::from(d.grad[a]);
         for &(s, j) in &jac[a] {
