@@ -6,6 +6,8 @@ pub mod contact_scenes_never_intersect;
 pub mod default_scene_converges_to_tolerance;
 pub mod free_fall_matches_backward_euler;
 pub mod incline_friction;
+pub mod joint_rig;
+pub mod joints_hold_their_load;
 pub mod pendulum_period;
 pub mod quasistatic_stretch_converges;
 pub mod results_are_deterministic;
