@@ -55,9 +55,14 @@ pub struct JointElement {
 
 /// A position servo: each step the controller's target velocity is set to close the remaining
 /// error to `target` within `response_time_s` (capped by the controller's force or torque).
+///
+/// It is a proportional controller on the velocity target, so a steady load `L` (below the
+/// controller's cap `F`, with its delay `δ`) leaves the offset `L·δ·response_time_s/F` (e.g.
+/// 0.025° for a 30° arm held at half the cap with δ = 0.01 rad/s and 0.1 s). Angle errors are
+/// taken modulo 360° into (−180°, 180°]: a hinge servo turns the shorter way to its target.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Servo {
-    /// Target angle (rad) or position (m).
+    /// Target angle (rad, modulo 2π) or position (m).
     pub target: f64,
     /// Time constant of the approach, s (at least one step).
     pub response_time_s: f64,
@@ -245,7 +250,12 @@ impl Potential<4> for JointSet {
         };
         for el in &mut self.elements {
             if let Some(servo) = el.servo {
-                let error = servo.target - servo.measure.value(&poses);
+                let mut error = servo.target - servo.measure.value(&poses);
+                if let Measure::Angle { .. } = servo.measure {
+                    // The angle is measured in (−π, π]: without wrapping, a target beyond ±180°
+                    // is never reached and the servo spins for ever.
+                    error = wrap_angle(error);
+                }
                 let speed = error / servo.response_time_s.max(state.dt);
                 match &mut el.primitive {
                     Primitive::AngularVelocity { target_rad_s, .. } => *target_rad_s = speed,
@@ -342,6 +352,17 @@ impl Side {
             None => Node::World([0.0; 3]),
             Some(b) => Node::AngularVelocity(b),
         }
+    }
+}
+
+/// `angle` (rad) moved into (−π, π] by whole turns.
+fn wrap_angle(angle: f64) -> f64 {
+    let tau = std::f64::consts::TAU;
+    let w = angle - tau * (angle / tau).round();
+    if w <= -std::f64::consts::PI {
+        w + tau
+    } else {
+        w
     }
 }
 
@@ -1052,7 +1073,9 @@ impl Simulation {
     }
 
     /// Position servo on a hinge: a motor whose target speed each step closes the remaining
-    /// angle error within `response_time_s`, with at most `max_torque_n_m`.
+    /// angle error within `response_time_s`, with at most `max_torque_n_m`. The target is an
+    /// angle modulo 360° (the hinge angle is measured in (−180°, 180°]); the servo turns the
+    /// shorter way to it. See [`Servo`] for its steady offset under load.
     #[allow(clippy::too_many_arguments)]
     pub fn add_hinge_servo(
         &mut self,
@@ -1467,6 +1490,27 @@ impl Node {
             Node::World(p) => Vector3::from(p),
             Node::Point(i) => sim.nodes.x[i as usize],
             Node::AngularVelocity(b) => sim.bodies.angular_velocity[b as usize],
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::wrap_angle;
+    use std::f64::consts::PI;
+
+    #[test]
+    fn servo_angle_errors_wrap_into_the_half_open_turn() {
+        for (a, w) in [
+            (0.0, 0.0),
+            (PI, PI),
+            (-PI, PI),
+            (1.5 * PI, -0.5 * PI),
+            (-1.5 * PI, 0.5 * PI),
+            (200f64.to_radians(), -160f64.to_radians()),
+            (7.0 * PI + 0.1, -PI + 0.1),
+        ] {
+            assert!((wrap_angle(a) - w).abs() < 1e-12, "{a} → {} (want {w})", wrap_angle(a));
         }
     }
 }
