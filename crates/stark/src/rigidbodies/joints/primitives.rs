@@ -203,6 +203,286 @@ impl Primitive {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::energy::potential::Potential;
+    use crate::energy::testing::{derivative_errors, TestState};
+    use crate::energy::{EnergyTerm, EvalMode, Node, PotentialTerm};
+    use crate::state::BodyArrays;
+    use nalgebra::{Matrix3, UnitQuaternion};
+    use rand::rngs::StdRng;
+    use rand::{Rng, SeedableRng};
+
+    const DT: f64 = 0.01;
+
+    /// One primitive as a potential, for the derivative checks.
+    struct One {
+        primitive: Primitive,
+        nodes: [Node; 4],
+        k: f64,
+    }
+
+    impl Potential<4> for One {
+        fn name(&self) -> &str {
+            "one joint primitive"
+        }
+        fn num_elements(&self) -> usize {
+            1
+        }
+        fn nodes(&self, _e: usize) -> [Node; 4] {
+            self.nodes
+        }
+        fn energy<S: Scalar>(&self, _e: usize, x: &[Vec3<S>; 4], stencil: &Stencil<4>) -> S {
+            self.primitive.energy(x, stencil, self.k)
+        }
+    }
+
+    fn rvec(rng: &mut StdRng, s: f64) -> Vector3<f64> {
+        Vector3::new(
+            rng.random_range(-s..s),
+            rng.random_range(-s..s),
+            rng.random_range(-s..s),
+        )
+    }
+
+    /// Two bodies at random poses with random start velocities.
+    fn random_bodies(rng: &mut StdRng) -> BodyArrays {
+        let mut b = BodyArrays::default();
+        for _ in 0..2 {
+            b.position.push(rvec(rng, 1.0));
+            b.orientation.push(UnitQuaternion::from_scaled_axis(rvec(rng, 2.0)));
+            b.velocity.push(rvec(rng, 1.0));
+            b.angular_velocity.push(rvec(rng, 3.0));
+            b.mass.push(1.0);
+            b.inertia_local.push(Matrix3::identity());
+            b.force.push(Vector3::zeros());
+            b.torque.push(Vector3::zeros());
+            b.acceleration.push(Vector3::zeros());
+            b.angular_acceleration.push(Vector3::zeros());
+        }
+        b
+    }
+
+    fn state(bodies: &BodyArrays, body_v: &[(Vector3<f64>, Vector3<f64>)]) -> TestState {
+        TestState::new(vec![], vec![], vec![], vec![], DT).with_bodies(bodies.clone(), body_v)
+    }
+
+    /// Body `b`'s point `local` (or a world point when `b` is `None`).
+    fn point(b: Option<u32>, local: &Vector3<f64>) -> Node {
+        match b {
+            Some(b) => Node::rigid(b as usize, local),
+            None => Node::World((*local).into()),
+        }
+    }
+
+    /// A unit direction of body `b` (or the world) as two points one unit apart.
+    fn direction(rng: &mut StdRng, b: Option<u32>) -> [Node; 2] {
+        let p = rvec(rng, 0.3);
+        let d = rvec(rng, 1.0).normalize();
+        [point(b, &p), point(b, &(p + d))]
+    }
+
+    fn omega(b: Option<u32>) -> Node {
+        b.map_or(Node::World([0.0; 3]), Node::AngularVelocity)
+    }
+
+    fn pad(nodes: &[Node]) -> [Node; 4] {
+        let mut all = [Node::World([0.0; 3]); 4];
+        all[..nodes.len()].copy_from_slice(nodes);
+        all
+    }
+
+    /// Every primitive in every regime (limits active on either side, controllers below and
+    /// beyond their cap), between bodies 0 and 1 and between the world and body 1, at the
+    /// trial state `st`.
+    fn cases(rng: &mut StdRng, st: &TestState) -> Vec<(String, Primitive, [Node; 4])> {
+        let eval = st.eval();
+        let at = |n: &[Node; 4]| Stencil::new(*n, &eval);
+        let mut out = Vec::new();
+        for a in [Some(0u32), None] {
+            let b = Some(1u32);
+            let side = if a.is_some() { "body-body" } else { "world-body" };
+            let pa = point(a, &rvec(rng, 0.5));
+            let pb = point(b, &rvec(rng, 0.5));
+            let two = pad(&[pa, pb]);
+            let l = {
+                let s = at(&two);
+                (s.x[1] - s.x[0]).norm()
+            };
+            let [a0, a1] = direction(rng, a);
+            let [b0, b1] = direction(rng, b);
+            let dirs = pad(&[a0, a1, b0, b1]);
+            let angle = {
+                let s = at(&dirs);
+                (s.x[1] - s.x[0]).angle(&(s.x[3] - s.x[2]))
+            };
+            let axis_pb = pad(&[a0, a1, pb]);
+            let mut push = |name: &str, p: Primitive, n: [Node; 4]| out.push((format!("{name} ({side})"), p, n));
+            push("point", Primitive::Point, two);
+            push("point on axis", Primitive::PointOnAxis, axis_pb);
+            push("distance", Primitive::Distance { target_m: 0.7 * l }, two);
+            push(
+                "distance limits, above max",
+                Primitive::DistanceLimits {
+                    min_m: 0.5 * l,
+                    max_m: 0.8 * l,
+                },
+                two,
+            );
+            push(
+                "distance limits, below min",
+                Primitive::DistanceLimits {
+                    min_m: 1.2 * l,
+                    max_m: 1.5 * l,
+                },
+                two,
+            );
+            push("direction", Primitive::Direction, dirs);
+            push("angle limit", Primitive::AngleLimit { limit_rad: 0.6 * angle }, dirs);
+            push("perpendicular", Primitive::Perpendicular, dirs);
+            push(
+                "spring",
+                Primitive::Spring {
+                    rest_length_m: 0.8 * l,
+                    damping_n_s_m: 3.0,
+                },
+                two,
+            );
+            // Controllers: velocity error u at the trial state, target set to put u in a regime.
+            let lin_u = {
+                let s = at(&axis_pb);
+                let d = s.x[1] - s.x[0];
+                ((s.x[2] - s.x0[2]) - (s.x[0] - s.x0[0])).dot(&d) / DT
+            };
+            let ang_nodes = pad(&[omega(a), omega(b), a0, a1]);
+            let ang_u = {
+                let s = at(&ang_nodes);
+                (s.x[1] - s.x[0]).dot(&(s.x[3] - s.x[2]))
+            };
+            for (regime, offset) in [("linear", 0.4), ("capped", -3.0)] {
+                let delay = 0.05;
+                push(
+                    &format!("linear velocity, {regime}"),
+                    Primitive::LinearVelocity {
+                        target_m_s: lin_u - offset * delay,
+                        max_force_n: 7.0,
+                        delay_m_s: delay,
+                    },
+                    axis_pb,
+                );
+                push(
+                    &format!("angular velocity, {regime}"),
+                    Primitive::AngularVelocity {
+                        target_rad_s: ang_u - offset * delay,
+                        max_torque_n_m: 3.0,
+                        delay_rad_s: delay,
+                    },
+                    ang_nodes,
+                );
+            }
+        }
+        out
+    }
+
+    fn rel_err(a: &[f64], b: &[f64]) -> f64 {
+        let diff = a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum::<f64>().sqrt();
+        let scale = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let s = scale(a).max(scale(b));
+        if s == 0.0 {
+            diff
+        } else {
+            diff / s
+        }
+    }
+
+    /// DOF-space gradient and Hessian of the element (through the kinematic map) against
+    /// central differences of the energy as a function of the bodies' `(v, ω)`: relative errors,
+    /// and the gradient's norm.
+    fn mapped_errors(one: One, bodies: &BodyArrays, body_v: &[(Vector3<f64>, Vector3<f64>)]) -> (f64, f64, f64) {
+        let term = PotentialTerm::new(one);
+        let st = state(bodies, body_v);
+        let eval = st.eval();
+        let w = term.stencil_width(&eval);
+        let mut blocks = vec![0u32; w];
+        term.write_stencils(&eval, &mut blocks);
+        let mut out = vec![0.0; crate::energy::term::element_stride(w)];
+        term.evaluate_element(0, &eval, EvalMode::ExactHessian, &mut out);
+        // DOF blocks of a body-only state: 2b (v of body b), 2b + 1 (ω of body b).
+        let perturbed = |blk: u32, i: usize, h: f64| {
+            let mut bv = body_v.to_vec();
+            let (v, o) = &mut bv[blk as usize / 2];
+            if blk.is_multiple_of(2) {
+                v[i] += h;
+            } else {
+                o[i] += h;
+            }
+            state(bodies, &bv)
+        };
+        let grad_of = |s: &TestState| {
+            let e = s.eval();
+            let mut o = vec![0.0; crate::energy::term::element_stride(w)];
+            term.evaluate_element(0, &e, EvalMode::ExactHessian, &mut o);
+            o[1..1 + 3 * w].to_vec()
+        };
+        let h = 1e-5;
+        let n = 3 * w;
+        let mut fd_g = vec![0.0; n];
+        let mut fd_h = vec![0.0; n * n];
+        let mut exact_h = vec![0.0; n * n];
+        for (a, &blk) in blocks.iter().enumerate() {
+            if blk == crate::energy::term::NO_DOF {
+                continue;
+            }
+            for i in 0..3 {
+                let (sp, sm) = (perturbed(blk, i, h), perturbed(blk, i, -h));
+                fd_g[3 * a + i] = (term.energy(&sp.eval()) - term.energy(&sm.eval())) / (2.0 * h);
+                let (gp, gm) = (grad_of(&sp), grad_of(&sm));
+                for r in 0..n {
+                    fd_h[r * n + 3 * a + i] = (gp[r] - gm[r]) / (2.0 * h);
+                }
+            }
+        }
+        let base = 1 + 3 * w;
+        for a in 0..w {
+            for b in 0..w {
+                for i in 0..3 {
+                    for j in 0..3 {
+                        exact_h[(3 * a + i) * n + 3 * b + j] = out[base + 9 * (a * w + b) + 3 * i + j];
+                    }
+                }
+            }
+        }
+        let norm = out[1..1 + n].iter().map(|g| g * g).sum::<f64>().sqrt();
+        (rel_err(&out[1..1 + n], &fd_g), rel_err(&exact_h, &fd_h), norm)
+    }
+
+    #[test]
+    fn derivatives_match_finite_differences_in_positions_and_body_velocities() {
+        let mut rng = StdRng::seed_from_u64(4);
+        let mut worst = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
+        for _trial in 0..3 {
+            let bodies = random_bodies(&mut rng);
+            let body_v: Vec<_> = (0..2).map(|_| (rvec(&mut rng, 1.0), rvec(&mut rng, 3.0))).collect();
+            let st = state(&bodies, &body_v);
+            for (name, primitive, nodes) in cases(&mut rng, &st) {
+                let one = One {
+                    primitive,
+                    nodes,
+                    k: 1e3,
+                };
+                let (eg, eh, _) = derivative_errors(&one, &st.eval(), 1e-6);
+                assert!(eg < 1e-6, "{name}: position gradient vs FD, relative error {eg:e}");
+                assert!(eh < 1e-6, "{name}: position Hessian vs FD, relative error {eh:e}");
+                let (mg, mh, norm) = mapped_errors(one, &bodies, &body_v);
+                assert!(norm > 1e-6, "{name}: the case is inactive (zero gradient)");
+                assert!(mg < 1e-6, "{name}: (v, ω) gradient vs FD, relative error {mg:e}");
+                assert!(mh < 1e-6, "{name}: (v, ω) Hessian vs FD, relative error {mh:e}");
+                worst = (worst.0.max(eg), worst.1.max(eh), worst.2.max(mg), worst.3.max(mh));
+            }
+        }
+        eprintln!(
+            "worst relative errors: position gradient {:.1e}, Hessian {:.1e}; (v, ω) gradient {:.1e}, Hessian {:.1e}",
+            worst.0, worst.1, worst.2, worst.3
+        );
+    }
 
     #[test]
     fn capped_law_is_c1_with_the_right_force() {
@@ -211,7 +491,11 @@ mod tests {
         for u in [-0.1, -0.01, -0.005, 0.0, 0.003, 0.01, 0.2] {
             let slope = (capped(u + h, f, d) - capped(u - h, f, d)) / (2.0 * h);
             let expected = if u.abs() < d { f * u / d } else { f * u.signum() };
-            assert!((slope - expected).abs() < 1e-5, "u {u}: {slope} vs {expected}");
+            // Central differences straddling the kink at |u| = δ err by up to F·h/(4δ).
+            assert!(
+                (slope - expected).abs() < 1e-6 + f * h / d,
+                "u {u}: {slope} vs {expected}"
+            );
         }
     }
 
