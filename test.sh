@@ -7,6 +7,7 @@ cd "$(dirname "$0")"
 
 cargo test --workspace --release
 
+python_start=$SECONDS
 venv="$PWD/target/pyenv"
 if [ ! -x "$venv/bin/python" ]; then
     "${PYTHON:-python3}" -m venv "$venv"
@@ -16,3 +17,4 @@ if [ ! -x "$venv/bin/maturin" ] || ! "$venv/bin/python" -c "import numpy, pytest
 fi
 VIRTUAL_ENV="$venv" "$venv/bin/maturin" develop --release --quiet -m crates/stark-python/Cargo.toml
 "$venv/bin/python" -m pytest -q crates/stark-python/tests
+echo "Python part (set-up, extension build, pytest): $((SECONDS - python_start)) s"
