@@ -1,0 +1,994 @@
+"""Stark-rs from Python: strongly coupled rigid bodies, cloth, FEM solids and IPC contact.
+
+Type stubs of the ``starkrs`` package (the extension module ``starkrs._starkrs``).
+Conventions: points, velocities and forces are ``(n, 3)`` float64 arrays; single vectors ``(3,)``;
+element index arrays ``(m, k)`` integers; rotations are quaternions ``(w, x, y, z)`` or ``(3, 3)``
+rotation matrices. Every array returned is a new array (changing it changes nothing else).
+"""
+
+import os
+from typing import Any, Callable, Literal, Optional, Union, final, overload
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from . import geometry as geometry
+from . import meshes as meshes
+
+__version__: str
+
+_Vector = ArrayLike
+"""Three numbers: a list, tuple or ``(3,)`` array."""
+_Points = ArrayLike
+"""An ``(n, 3)`` array of floats (lists of lists are converted)."""
+_Indices = ArrayLike
+"""An array of non-negative integer node indices."""
+_Rotation = ArrayLike
+"""A quaternion ``(w, x, y, z)`` (normalised on input) or a ``(3, 3)`` rotation matrix."""
+_Report = dict[str, Any]
+"""Plain data converted from the library's reports (JSON-like dicts)."""
+
+class StarkError(Exception):
+    """Every error of the simulator: the message names the object and the field at fault."""
+
+class SceneError(StarkError):
+    """A scene file is invalid: the message names the file, line, column, entry and field."""
+
+class StepFailedError(StarkError):
+    """A time step failed even at the smallest allowed step size."""
+
+class InvalidHandleError(StarkError):
+    """A handle does not belong to this simulation."""
+
+# ------------------------------------------------------------------------------------------
+# Settings, parameters and materials: every field of the Rust struct as an attribute.
+# ------------------------------------------------------------------------------------------
+
+@final
+class Settings:
+    """Everything that configures a simulation run. `Settings()` has the library's defaults."""
+    name: str
+    """Name, used for output files (default: "simulation")."""
+    time_step_s: float
+    """Largest (and initial) time step, s (default: 1/30)."""
+    adaptive_time_step: bool
+    """Halve dt on a failed step and grow it back after successes (default: True)."""
+    min_time_step_s: float
+    """Smallest dt before the simulation gives up, s (default: 1e-6)."""
+    time_step_growth: float
+    """Factor dt grows by after each successful step (default: 1.5)."""
+    gravity_m_s2: NDArray[np.float64]
+    """Gravity, m/s² (default: (0, 0, -9.81))."""
+    threads: int
+    """Worker threads; 0 uses all cores (default: 0)."""
+    newton: NewtonSettings
+    """Newton solver settings."""
+    output: OutputSettings
+    """Output settings."""
+    contact: ContactSettings
+    """Contact settings."""
+    max_hardening_retries: int
+    """Largest number of times one step is repeated after a model hardened a stiffness (default: 40)."""
+    def __new__(cls, *, name: str = ..., time_step_s: float = ..., adaptive_time_step: bool = ..., min_time_step_s: float = ..., time_step_growth: float = ..., gravity_m_s2: ArrayLike = ..., threads: int = ..., newton: NewtonSettings = ..., output: OutputSettings = ..., contact: ContactSettings = ..., max_hardening_retries: int = ...) -> Settings:
+        """Defaults of the library, with the given fields replaced."""
+    def validate(self) -> None:
+        """Check the values; raises `StarkError` naming the field."""
+    def to_dict(self) -> dict[str, Any]:
+        """The fields as a plain dict (nested settings as nested dicts)."""
+    def copy(self) -> Settings:
+        """A deep copy (nested settings are copied too)."""
+    def __copy__(self) -> Settings: ...
+    def __deepcopy__(self, memo: Any) -> Settings: ...
+
+@final
+class NewtonSettings:
+    """Newton solver settings (`settings.newton`)."""
+    residual_tolerance_n: float
+    """A step converges when the force residual falls below this, N (default: 1e-6)."""
+    step_tolerance_m_s: float
+    """A step also converges when the Newton step falls below this, m/s; 0 disables it (default: 0)."""
+    max_iterations: int
+    """Newton iterations before the step counts as failed and dt is halved (default: 100)."""
+    linear_solver: Literal["pcg", "cholesky"]
+    """Linear solver: "pcg" or "cholesky" (default: "pcg")."""
+    cg_max_iterations: int
+    """Largest number of CG iterations per solve (default: 10000)."""
+    cg_relative_tolerance: float
+    """Relative CG tolerance at the first Newton iteration (default: 1e-2)."""
+    armijo: float
+    """Armijo sufficient-decrease constant (default: 1e-4)."""
+    max_line_search_iterations: int
+    """Largest number of step halvings in the line search (default: 30)."""
+    projection: Literal["always", "on_demand"]
+    """When element Hessians are projected: "always" or "on_demand" (default: "on_demand")."""
+    def __new__(cls, *, residual_tolerance_n: float = ..., step_tolerance_m_s: float = ..., max_iterations: int = ..., linear_solver: Literal["pcg", "cholesky"] = ..., cg_max_iterations: int = ..., cg_relative_tolerance: float = ..., armijo: float = ..., max_line_search_iterations: int = ..., projection: Literal["always", "on_demand"] = ...) -> NewtonSettings:
+        """Defaults of the library, with the given fields replaced."""
+    def to_dict(self) -> dict[str, Any]:
+        """The fields as a plain dict (nested settings as nested dicts)."""
+    def copy(self) -> NewtonSettings:
+        """A deep copy (nested settings are copied too)."""
+    def __copy__(self) -> NewtonSettings: ...
+    def __deepcopy__(self, memo: Any) -> NewtonSettings: ...
+
+@final
+class OutputSettings:
+    """Frame and log output (`settings.output`)."""
+    directory: Union[str, os.PathLike[str]]
+    """Directory for frames and logs (default: "output")."""
+    fps: float
+    """Frames per simulated second; 0 disables frames (default: 30)."""
+    frames: bool
+    """Write VTK frames (default: True)."""
+    step_log: bool
+    """Write the per-step log `<name>.steps.jsonl` (default: True)."""
+    def __new__(cls, *, directory: Union[str, os.PathLike[str]] = ..., fps: float = ..., frames: bool = ..., step_log: bool = ...) -> OutputSettings:
+        """Defaults of the library, with the given fields replaced."""
+    def to_dict(self) -> dict[str, Any]:
+        """The fields as a plain dict (nested settings as nested dicts)."""
+    def copy(self) -> OutputSettings:
+        """A deep copy (nested settings are copied too)."""
+    def __copy__(self) -> OutputSettings: ...
+    def __deepcopy__(self, memo: Any) -> OutputSettings: ...
+
+@final
+class ContactSettings:
+    """Contact settings (`settings.contact`)."""
+    default_thickness_m: Optional[float]
+    """Contact thickness of objects that set none, m; None: such objects take no part in contact (default: None)."""
+    barrier: Literal["log", "cubic"]
+    """Barrier function: "log" (IPC, infinite at contact) or "cubic" (the original Stark's) (default: "log")."""
+    stiffness: Optional[float]
+    """Barrier stiffness κ, N/m; None chooses m̄/dt² (default: None)."""
+    min_distance_fraction: float
+    """κ doubles after a step in which a pair came closer than this fraction of its d̂ (default: 1e-3)."""
+    max_stiffness_factor: float
+    """Upper bound of the adaptive κ relative to its initial value (default: 1e8)."""
+    friction_stick_slide_threshold_m_s: float
+    """Relative speed below which friction sticks, m/s (default: 0.01)."""
+    friction_iterations: int
+    """Friction solves per step (default: 1)."""
+    hessian: Literal["exact", "projected", "gauss_newton"]
+    """Barrier pair Hessian: "exact", "projected" or "gauss_newton" (default: "projected")."""
+    ccd: bool
+    """Continuous collision detection in the line search (default: True)."""
+    def __new__(cls, *, default_thickness_m: Optional[float] = ..., barrier: Literal["log", "cubic"] = ..., stiffness: Optional[float] = ..., min_distance_fraction: float = ..., max_stiffness_factor: float = ..., friction_stick_slide_threshold_m_s: float = ..., friction_iterations: int = ..., hessian: Literal["exact", "projected", "gauss_newton"] = ..., ccd: bool = ...) -> ContactSettings:
+        """Defaults of the library, with the given fields replaced."""
+    def to_dict(self) -> dict[str, Any]:
+        """The fields as a plain dict (nested settings as nested dicts)."""
+    def copy(self) -> ContactSettings:
+        """A deep copy (nested settings are copied too)."""
+    def __copy__(self) -> ContactSettings: ...
+    def __deepcopy__(self, memo: Any) -> ContactSettings: ...
+
+@final
+class InertiaParams:
+    """Lumped inertia of a deformable object."""
+    density: float
+    """Density per unit length, area or volume: kg/m, kg/m² or kg/m³ (default: 1)."""
+    damping: float
+    """Inertial damping, 1/s: a drag force −m·d·v (default: 0)."""
+    quasistatic: bool
+    """Drop the kinetic terms: each step solves for static equilibrium (default: False)."""
+    def __new__(cls, *, density: float = ..., damping: float = ..., quasistatic: bool = ...) -> InertiaParams:
+        """Defaults of the library, with the given fields replaced."""
+    def to_dict(self) -> dict[str, Any]:
+        """The fields as a plain dict (nested settings as nested dicts)."""
+    def copy(self) -> InertiaParams:
+        """A deep copy (nested settings are copied too)."""
+    def __copy__(self) -> InertiaParams: ...
+    def __deepcopy__(self, memo: Any) -> InertiaParams: ...
+
+@final
+class TriangleStrainParams:
+    """Membrane strain of a shell or cloth (Neo-Hookean triangles with strain limiting)."""
+    thickness_m: float
+    """Shell thickness, m."""
+    youngs_modulus: float
+    """Young's modulus, Pa."""
+    poissons_ratio: float
+    """Poisson's ratio."""
+    damping: float
+    """Strain-rate damping, Pa·s."""
+    strain_limit: float
+    """Largest principal strain before the limiting penalty starts (inf: off)."""
+    strain_limit_stiffness: float
+    """Stiffness of the strain-limiting penalty, Pa."""
+    inflation_pa: float
+    """Inflation pressure, Pa."""
+    scale: float
+    """Factor on the whole energy."""
+    def __new__(cls, *, thickness_m: float = ..., youngs_modulus: float = ..., poissons_ratio: float = ..., damping: float = ..., strain_limit: float = ..., strain_limit_stiffness: float = ..., inflation_pa: float = ..., scale: float = ...) -> TriangleStrainParams:
+        """Defaults of the library, with the given fields replaced."""
+    def to_dict(self) -> dict[str, Any]:
+        """The fields as a plain dict (nested settings as nested dicts)."""
+    def copy(self) -> TriangleStrainParams:
+        """A deep copy (nested settings are copied too)."""
+    def __copy__(self) -> TriangleStrainParams: ...
+    def __deepcopy__(self, memo: Any) -> TriangleStrainParams: ...
+
+@final
+class TetStrainParams:
+    """Volumetric strain of a solid (Stable Neo-Hookean tets with strain limiting)."""
+    youngs_modulus: float
+    """Young's modulus, Pa."""
+    poissons_ratio: float
+    """Poisson's ratio."""
+    damping: float
+    """Strain-rate damping, Pa·s."""
+    strain_limit: float
+    """Largest principal strain before the limiting penalty starts (inf: off)."""
+    strain_limit_stiffness: float
+    """Stiffness of the strain-limiting penalty, Pa."""
+    scale: float
+    """Factor on the whole energy."""
+    def __new__(cls, *, youngs_modulus: float = ..., poissons_ratio: float = ..., damping: float = ..., strain_limit: float = ..., strain_limit_stiffness: float = ..., scale: float = ...) -> TetStrainParams:
+        """Defaults of the library, with the given fields replaced."""
+    def to_dict(self) -> dict[str, Any]:
+        """The fields as a plain dict (nested settings as nested dicts)."""
+    def copy(self) -> TetStrainParams:
+        """A deep copy (nested settings are copied too)."""
+    def __copy__(self) -> TetStrainParams: ...
+    def __deepcopy__(self, memo: Any) -> TetStrainParams: ...
+
+@final
+class SegmentStrainParams:
+    """Axial strain of a rod or cable made of segments."""
+    section_radius_m: float
+    """Radius of the cross-section, m."""
+    youngs_modulus: float
+    """Young's modulus, Pa."""
+    damping: float
+    """Strain-rate damping, Pa·s."""
+    strain_limit: float
+    """Largest strain before the limiting penalty starts (inf: off)."""
+    strain_limit_stiffness: float
+    """Stiffness of the strain-limiting penalty, Pa."""
+    scale: float
+    """Factor on the whole energy."""
+    def __new__(cls, *, section_radius_m: float = ..., youngs_modulus: float = ..., damping: float = ..., strain_limit: float = ..., strain_limit_stiffness: float = ..., scale: float = ...) -> SegmentStrainParams:
+        """Defaults of the library, with the given fields replaced."""
+    def to_dict(self) -> dict[str, Any]:
+        """The fields as a plain dict (nested settings as nested dicts)."""
+    def copy(self) -> SegmentStrainParams:
+        """A deep copy (nested settings are copied too)."""
+    def __copy__(self) -> SegmentStrainParams: ...
+    def __deepcopy__(self, memo: Any) -> SegmentStrainParams: ...
+
+@final
+class FlatBendingParams:
+    """Quadratic bending towards the flat state (cloth)."""
+    stiffness: float
+    """Bending stiffness, N·m."""
+    damping: float
+    """Bending damping, N·m·s."""
+    def __new__(cls, *, stiffness: float = ..., damping: float = ...) -> FlatBendingParams:
+        """Defaults of the library, with the given fields replaced."""
+    def to_dict(self) -> dict[str, Any]:
+        """The fields as a plain dict (nested settings as nested dicts)."""
+    def copy(self) -> FlatBendingParams:
+        """A deep copy (nested settings are copied too)."""
+    def __copy__(self) -> FlatBendingParams: ...
+    def __deepcopy__(self, memo: Any) -> FlatBendingParams: ...
+
+@final
+class DihedralBendingParams:
+    """Discrete-shell bending towards the rest dihedral angles (curved shells)."""
+    stiffness: float
+    """Bending stiffness, N·m."""
+    damping: float
+    """Bending damping, N·m·s."""
+    def __new__(cls, *, stiffness: float = ..., damping: float = ...) -> DihedralBendingParams:
+        """Defaults of the library, with the given fields replaced."""
+    def to_dict(self) -> dict[str, Any]:
+        """The fields as a plain dict (nested settings as nested dicts)."""
+    def copy(self) -> DihedralBendingParams:
+        """A deep copy (nested settings are copied too)."""
+    def __copy__(self) -> DihedralBendingParams: ...
+    def __deepcopy__(self, memo: Any) -> DihedralBendingParams: ...
+
+@final
+class PrescribedParams:
+    """Prescribed positions: nodes pulled to targets by stiff springs hardened to a tolerance."""
+    stiffness: float
+    """Spring stiffness, N/m."""
+    tolerance_m: float
+    """Largest allowed distance to the target after a step, m (inf: no hardening)."""
+    def __new__(cls, *, stiffness: float = ..., tolerance_m: float = ...) -> PrescribedParams:
+        """Defaults of the library, with the given fields replaced."""
+    def to_dict(self) -> dict[str, Any]:
+        """The fields as a plain dict (nested settings as nested dicts)."""
+    def copy(self) -> PrescribedParams:
+        """A deep copy (nested settings are copied too)."""
+    def __copy__(self) -> PrescribedParams: ...
+    def __deepcopy__(self, memo: Any) -> PrescribedParams: ...
+
+@final
+class AttachmentParams:
+    """Attachments between deformable objects: stiff springs hardened to a tolerance."""
+    stiffness: float
+    """Spring stiffness, N/m (default: 1e3)."""
+    tolerance_m: float
+    """Largest allowed gap after a step, m (default: inf, no hardening)."""
+    def __new__(cls, *, stiffness: float = ..., tolerance_m: float = ...) -> AttachmentParams:
+        """Defaults of the library, with the given fields replaced."""
+    def to_dict(self) -> dict[str, Any]:
+        """The fields as a plain dict (nested settings as nested dicts)."""
+    def copy(self) -> AttachmentParams:
+        """A deep copy (nested settings are copied too)."""
+    def __copy__(self) -> AttachmentParams: ...
+    def __deepcopy__(self, memo: Any) -> AttachmentParams: ...
+
+@final
+class RigidBodyParams:
+    """Damping of a rigid body."""
+    linear_damping_1_s: float
+    """Linear velocity damping, 1/s (default: 0)."""
+    angular_damping_1_s: float
+    """Angular velocity damping, 1/s (default: 0)."""
+    def __new__(cls, *, linear_damping_1_s: float = ..., angular_damping_1_s: float = ...) -> RigidBodyParams:
+        """Defaults of the library, with the given fields replaced."""
+    def to_dict(self) -> dict[str, Any]:
+        """The fields as a plain dict (nested settings as nested dicts)."""
+    def copy(self) -> RigidBodyParams:
+        """A deep copy (nested settings are copied too)."""
+    def __copy__(self) -> RigidBodyParams: ...
+    def __deepcopy__(self, memo: Any) -> RigidBodyParams: ...
+
+@final
+class LineMaterial:
+    """Material of a rod or cable: inertia, axial strain and contact thickness."""
+    inertia: InertiaParams
+    """Inertia (density in kg/m)."""
+    strain: SegmentStrainParams
+    """Axial strain."""
+    contact_thickness_m: Optional[float]
+    """Contact thickness, m; None uses settings.contact.default_thickness_m."""
+    def __new__(cls, *, inertia: InertiaParams = ..., strain: SegmentStrainParams = ..., contact_thickness_m: Optional[float] = ...) -> LineMaterial:
+        """Defaults of the library, with the given fields replaced."""
+    def to_dict(self) -> dict[str, Any]:
+        """The fields as a plain dict (nested settings as nested dicts)."""
+    def copy(self) -> LineMaterial:
+        """A deep copy (nested settings are copied too)."""
+    def __copy__(self) -> LineMaterial: ...
+    def __deepcopy__(self, memo: Any) -> LineMaterial: ...
+    @staticmethod
+    def elastic_rubber_band() -> LineMaterial:
+        """Elastic rubber band: 0.05 kg/m, r = 2 mm, E = 1e4 Pa, strain limit 10%."""
+
+@final
+class VolumeMaterial:
+    """Material of a solid: inertia, volumetric strain and contact thickness."""
+    inertia: InertiaParams
+    """Inertia (density in kg/m³)."""
+    strain: TetStrainParams
+    """Volumetric strain."""
+    contact_thickness_m: Optional[float]
+    """Contact thickness, m; None uses settings.contact.default_thickness_m."""
+    def __new__(cls, *, inertia: InertiaParams = ..., strain: TetStrainParams = ..., contact_thickness_m: Optional[float] = ...) -> VolumeMaterial:
+        """Defaults of the library, with the given fields replaced."""
+    def to_dict(self) -> dict[str, Any]:
+        """The fields as a plain dict (nested settings as nested dicts)."""
+    def copy(self) -> VolumeMaterial:
+        """A deep copy (nested settings are copied too)."""
+    def __copy__(self) -> VolumeMaterial: ...
+    def __deepcopy__(self, memo: Any) -> VolumeMaterial: ...
+    @staticmethod
+    def soft_rubber() -> VolumeMaterial:
+        """Soft rubber: 1000 kg/m³, E = 1e4 Pa, ν = 0.3, strain limit 100%, inertial damping 0.1/s."""
+
+@final
+class SurfaceMaterial:
+    """Material of a shell or cloth: inertia, membrane strain, bending and contact thickness."""
+    inertia: InertiaParams
+    """Inertia (density in kg/m²)."""
+    strain: TriangleStrainParams
+    """Membrane strain."""
+    bending: Union[FlatBendingParams, DihedralBendingParams, None]
+    """Bending: None, FlatBendingParams or DihedralBendingParams."""
+    contact_thickness_m: Optional[float]
+    """Contact thickness, m; None uses settings.contact.default_thickness_m."""
+    def __new__(cls, *, inertia: InertiaParams = ..., strain: TriangleStrainParams = ..., bending: Union[FlatBendingParams, DihedralBendingParams, None] = ..., contact_thickness_m: Optional[float] = ...) -> SurfaceMaterial:
+        """Defaults of the library, with the given fields replaced."""
+    def to_dict(self) -> dict[str, Any]:
+        """The fields as a plain dict (nested settings as nested dicts)."""
+    def copy(self) -> SurfaceMaterial:
+        """A deep copy (nested settings are copied too)."""
+    def __copy__(self) -> SurfaceMaterial: ...
+    def __deepcopy__(self, memo: Any) -> SurfaceMaterial: ...
+    @staticmethod
+    def cotton_fabric() -> SurfaceMaterial:
+        """Cotton fabric: 0.2 kg/m², 1 mm thick, E = 5e3 Pa, ν = 0.3, strain limit 10%, flat bending 1e-6 N·m."""
+
+
+# ------------------------------------------------------------------------------------------
+# Handles: small immutable objects naming a part of one simulation.
+# ------------------------------------------------------------------------------------------
+
+@final
+class NodeSet:
+    """A contiguous range of nodes: one object's nodes."""
+    @property
+    def index(self) -> int:
+        """Index of the set."""
+    @property
+    def first(self) -> int:
+        """First node in the simulation's node arrays."""
+    @property
+    def len(self) -> int:
+        """Number of nodes."""
+    def __len__(self) -> int: ...
+
+@final
+class InertiaHandle:
+    """The lumped inertia of one deformable object (`sim.params(h)`, `sim.mass(h)`)."""
+    @property
+    def index(self) -> int:
+        """Index of the group in its model."""
+
+@final
+class TriangleStrainHandle:
+    """The membrane strain of one surface (`sim.params(h)` is a `TriangleStrainParams`)."""
+    @property
+    def index(self) -> int:
+        """Index of the group in its model."""
+
+@final
+class TetStrainHandle:
+    """The tet strain of one volume (`sim.params(h)` is a `TetStrainParams`)."""
+    @property
+    def index(self) -> int:
+        """Index of the group in its model."""
+
+@final
+class SegmentStrainHandle:
+    """The segment strain of one line (`sim.params(h)` is a `SegmentStrainParams`)."""
+    @property
+    def index(self) -> int:
+        """Index of the group in its model."""
+
+@final
+class FlatBendingHandle:
+    """The flat bending of one surface (`sim.params(h)` is a `FlatBendingParams`)."""
+    @property
+    def index(self) -> int:
+        """Index of the group in its model."""
+
+@final
+class DihedralBendingHandle:
+    """The dihedral bending of one surface (`sim.params(h)` is a `DihedralBendingParams`)."""
+    @property
+    def index(self) -> int:
+        """Index of the group in its model."""
+
+@final
+class PrescribedHandle:
+    """A group of prescribed nodes (move it with `sim.set_transform(h, ...)`)."""
+    @property
+    def index(self) -> int:
+        """Index of the group in its model."""
+
+@final
+class ContactHandle:
+    """A contact object (`sim.set_friction(a, b, mu)`, `sim.disable_collision(a, b)`)."""
+    @property
+    def index(self) -> int:
+        """Index of the group in its model."""
+
+@final
+class AttachmentHandle:
+    """A group of attachments (`sim.attachment_gap(h)`)."""
+    @property
+    def kind(self) -> str:
+        """"point_point", "point_edge" or "point_triangle"."""
+    @property
+    def index(self) -> int:
+        """Index of the group among those of its kind."""
+
+@final
+class RigidBody:
+    """A rigid body. Joints, when added, take bodies like this one."""
+    @property
+    def index(self) -> int:
+        """Index of the body."""
+    @property
+    def label(self) -> str:
+        """Its label."""
+
+@final
+class RigidMesh:
+    """The collision mesh of a rigid body: its vertices are nodes that move with the body."""
+    @property
+    def body(self) -> RigidBody:
+        """The body."""
+    @property
+    def nodes(self) -> NodeSet:
+        """Its vertices in the node arrays."""
+    @property
+    def contact(self) -> ContactHandle:
+        """Its contact object."""
+
+@final
+class Surface:
+    """A shell or cloth added by `add_surface` or `add_surface_grid`."""
+    @property
+    def label(self) -> str:
+        """Its label."""
+    @property
+    def nodes(self) -> NodeSet:
+        """Its nodes."""
+    @property
+    def inertia(self) -> InertiaHandle:
+        """Its inertia."""
+    @property
+    def strain(self) -> TriangleStrainHandle:
+        """Its membrane strain."""
+    @property
+    def bending(self) -> Union[FlatBendingHandle, DihedralBendingHandle, None]:
+        """Its bending: a FlatBendingHandle, a DihedralBendingHandle or None."""
+    @property
+    def contact(self) -> Optional[ContactHandle]:
+        """Its contact object, if it has a contact thickness."""
+
+@final
+class Volume:
+    """A solid added by `add_volume` or `add_volume_grid`."""
+    @property
+    def label(self) -> str:
+        """Its label."""
+    @property
+    def nodes(self) -> NodeSet:
+        """Its nodes."""
+    @property
+    def inertia(self) -> InertiaHandle:
+        """Its inertia."""
+    @property
+    def strain(self) -> TetStrainHandle:
+        """Its tet strain."""
+    @property
+    def contact(self) -> Optional[ContactHandle]:
+        """Its contact object (its boundary surface), if it has a contact thickness."""
+
+@final
+class Line:
+    """A rod or cable added by `add_line` or `add_line_segments`."""
+    @property
+    def label(self) -> str:
+        """Its label."""
+    @property
+    def nodes(self) -> NodeSet:
+        """Its nodes."""
+    @property
+    def inertia(self) -> InertiaHandle:
+        """Its inertia."""
+    @property
+    def strain(self) -> SegmentStrainHandle:
+        """Its segment strain."""
+    @property
+    def contact(self) -> Optional[ContactHandle]:
+        """Its contact object, if it has a contact thickness."""
+
+@final
+class Obstacle:
+    """A kinematic obstacle added by `add_prescribed_surface`: move it with `sim.set_transform(obstacle, ...)`."""
+    @property
+    def label(self) -> str:
+        """Its label."""
+    @property
+    def nodes(self) -> NodeSet:
+        """Its nodes."""
+    @property
+    def prescribed(self) -> PrescribedHandle:
+        """The prescribed positions moving it."""
+    @property
+    def contact(self) -> ContactHandle:
+        """Its contact object."""
+
+_HasNodes = Union[NodeSet, Surface, Volume, Line, Obstacle, RigidMesh]
+"""A node set, or any object handle with one."""
+_HasContact = Union[ContactHandle, Surface, Volume, Line, Obstacle, RigidMesh]
+"""A contact object, or any object handle with one."""
+_HasPrescribed = Union[PrescribedHandle, Obstacle]
+"""Prescribed positions, or an obstacle."""
+_HasBody = Union[RigidBody, RigidMesh]
+"""A rigid body, or its collision mesh."""
+_ModelHandle = Union[
+    InertiaHandle,
+    TriangleStrainHandle,
+    TetStrainHandle,
+    SegmentStrainHandle,
+    FlatBendingHandle,
+    DihedralBendingHandle,
+    PrescribedHandle,
+    RigidBody,
+]
+"""A handle whose parameters `Simulation.params` reads and `Simulation.set_params` writes."""
+_ModelParams = Union[
+    InertiaParams,
+    TriangleStrainParams,
+    TetStrainParams,
+    SegmentStrainParams,
+    FlatBendingParams,
+    DihedralBendingParams,
+    PrescribedParams,
+    RigidBodyParams,
+]
+"""The parameters matching a `_ModelHandle`."""
+
+@final
+class MassProperties:
+    """Mass, centre of mass and inertia tensor of a solid with uniform density."""
+    def __new__(cls, mass_kg: float, center_of_mass_m: _Vector, inertia_kg_m2: ArrayLike) -> MassProperties: ...
+    @staticmethod
+    def cuboid(mass_kg: float, size: _Vector) -> MassProperties:
+        """Solid box of `mass_kg` with side lengths `size` (m), centred at the origin."""
+    @staticmethod
+    def sphere(mass_kg: float, radius: float) -> MassProperties:
+        """Solid sphere of `mass_kg` and radius `radius` (m)."""
+    @staticmethod
+    def cylinder(mass_kg: float, radius: float, height: float) -> MassProperties:
+        """Solid cylinder of `mass_kg`, radius and height (m) along z, centred."""
+    @staticmethod
+    def torus(mass_kg: float, major_radius: float, minor_radius: float) -> MassProperties:
+        """Solid torus in the xy plane: major radius (centre of the tube) and tube radius (m)."""
+    @staticmethod
+    def from_mesh(vertices: _Points, triangles: _Indices, density_kg_m3: float) -> MassProperties:
+        """A closed, outward-oriented triangle mesh of uniform density (kg/m³)."""
+    @property
+    def mass_kg(self) -> float:
+        """Mass, kg."""
+    @property
+    def center_of_mass_m(self) -> NDArray[np.float64]:
+        """Centre of mass in the input frame, m (zero for the centred primitives)."""
+    @property
+    def inertia_kg_m2(self) -> NDArray[np.float64]:
+        """Inertia tensor about the centre of mass, kg·m², (3, 3)."""
+
+# ------------------------------------------------------------------------------------------
+# The simulation
+# ------------------------------------------------------------------------------------------
+
+@final
+class Simulation:
+    """A simulation: objects, energies, settings and the time loop.
+
+    `Simulation(settings=None)` starts empty with `Settings()` defaults. Add objects with the
+    `add_*` methods (they return handles), then `step()` or `run(duration)`. `step` and `run`
+    release the GIL while solving; other threads calling methods meanwhile get a `StarkError`.
+    """
+
+    def __new__(cls, settings: Optional[Settings] = None) -> Simulation: ...
+    @property
+    def settings(self) -> Settings:
+        """A copy of the settings; assign a changed copy back. Changes take effect at the next step."""
+    @settings.setter
+    def settings(self, settings: Settings) -> None: ...
+    @property
+    def time(self) -> float:
+        """Simulated time, s."""
+    @property
+    def dt(self) -> float:
+        """Current time step, s (below settings.time_step_s after failures)."""
+    @property
+    def gravity(self) -> NDArray[np.float64]:
+        """Gravity, m/s² (a (3,) array); assigning takes effect at the next step."""
+    @gravity.setter
+    def gravity(self, g: _Vector) -> None: ...
+    @property
+    def num_nodes(self) -> int:
+        """Number of nodes (deformable nodes and rigid collision-mesh vertices)."""
+    @property
+    def num_rigid_bodies(self) -> int:
+        """Number of rigid bodies."""
+    @property
+    def contact_stiffness(self) -> float:
+        """Current barrier stiffness κ, N/m (0 before the first step)."""
+    def summary(self) -> _Report:
+        """Totals so far (steps, Newton iterations, residuals, wall time, frames ...) as a dict."""
+
+    # Time stepping
+    def step(self) -> _Report:
+        """Advance by one accepted time step; returns the step report as a dict."""
+    def run_one_step(self) -> _Report:
+        """The same as `step()` (the original's name)."""
+    def run(self, duration: float, callback: Optional[Callable[[Simulation], Any]] = None) -> _Report:
+        """Simulate `duration` more seconds, calling `callback(sim)` before every step if given.
+
+        The GIL is released while solving; Ctrl-C stops the run between steps (KeyboardInterrupt);
+        an exception raised by a callback stops the run and is re-raised. Returns the run summary.
+        """
+    def add_time_event(self, t0: float, t1: float, action: Callable[[Simulation, float], Any]) -> None:
+        """Run `action(sim, t)` before every step whose end time `t` lies in `[t0, t1)`."""
+    def write_frame(self) -> list[str]:
+        """Write one frame of every output mesh now; returns the file paths."""
+
+    # Nodes
+    def add_nodes(self, label: str, positions: _Points) -> NodeSet:
+        """Add bare nodes (no energy) at `positions` (n, 3) as a labelled object."""
+    def node_set(self, label: str) -> Optional[NodeSet]:
+        """The node set labelled `label`, or None."""
+    def node_set_labels(self) -> list[str]:
+        """Labels of all node sets (objects and collision meshes), in creation order."""
+    def positions(self, nodes: _HasNodes) -> NDArray[np.float64]:
+        """Positions of an object's nodes, m: a new (n, 3) array."""
+    def velocities(self, nodes: _HasNodes) -> NDArray[np.float64]:
+        """Velocities of an object's nodes, m/s: a new (n, 3) array."""
+    def rest_positions(self, nodes: _HasNodes) -> NDArray[np.float64]:
+        """Rest positions of an object's nodes, m (body-frame positions for a rigid collision mesh)."""
+    def forces(self, nodes: _HasNodes) -> NDArray[np.float64]:
+        """External forces on an object's nodes, N."""
+    def masses(self, nodes: _HasNodes) -> NDArray[np.float64]:
+        """Lumped masses of an object's nodes, kg: a new (n,) array."""
+    def set_positions(self, nodes: _HasNodes, positions: _Points) -> None:
+        """Move an object's nodes to `positions` (n, 3), m (deformable objects only)."""
+    def set_velocities(self, nodes: _HasNodes, velocities: Union[_Points, _Vector]) -> None:
+        """Set the velocities of an object's nodes, m/s: an (n, 3) array or one (3,) vector for all."""
+    def set_velocity(self, nodes: _HasNodes, velocity: _Vector) -> None:
+        """Set the velocity of every node of an object, m/s."""
+    def set_forces(self, nodes: _HasNodes, forces: Union[_Points, _Vector]) -> None:
+        """Set the external forces on an object's nodes, N (persist until changed)."""
+    def set_accelerations(self, nodes: _HasNodes, accelerations: Union[_Points, _Vector]) -> None:
+        """Set the external accelerations of an object's nodes (added to gravity), m/s²."""
+
+    # Deformable objects
+    def add_surface(self, label: str, vertices: _Points, triangles: _Indices, material: SurfaceMaterial) -> Surface:
+        """A shell or cloth from vertices (n, 3) and triangles (m, 3)."""
+    def add_surface_grid(
+        self, label: str, size: tuple[float, float], quads: tuple[int, int], material: SurfaceMaterial
+    ) -> Surface:
+        """A rectangular cloth of `size` (m) in the XY plane centred at the origin, `quads` per side."""
+    def add_volume(self, label: str, vertices: _Points, tets: _Indices, material: VolumeMaterial) -> Volume:
+        """A solid from vertices (n, 3) and tets (m, 4)."""
+    def add_volume_grid(
+        self, label: str, size: tuple[float, float, float], hexes: tuple[int, int, int], material: VolumeMaterial
+    ) -> Volume:
+        """A box of `size` (m) centred at the origin, `hexes` cells per side, 12 tets per cell."""
+    def add_line(self, label: str, vertices: _Points, segments: _Indices, material: LineMaterial) -> Line:
+        """A rod or cable from vertices (n, 3) and segments (m, 2)."""
+    def add_line_segments(
+        self, label: str, begin: _Vector, end: _Vector, n_segments: int, material: LineMaterial
+    ) -> Line:
+        """A straight line of `n_segments` from `begin` to `end`."""
+    def add_prescribed_surface(
+        self, label: str, vertices: _Points, triangles: _Indices, thickness_m: float, stiffness: float = 1e6
+    ) -> Obstacle:
+        """A kinematic obstacle: a triangle surface whose nodes all follow prescribed targets."""
+    def prescribe_in_box(
+        self, nodes: _HasNodes, center: _Vector, size: _Vector, params: Optional[PrescribedParams] = None
+    ) -> PrescribedHandle:
+        """Prescribe the nodes of an object inside the axis-aligned box of `center` and full `size` (m)."""
+    def prescribe_outside_box(
+        self, nodes: _HasNodes, center: _Vector, size: _Vector, params: Optional[PrescribedParams] = None
+    ) -> PrescribedHandle:
+        """Prescribe the nodes of an object outside the axis-aligned box of `center` and `size` (m)."""
+    def prescribe_nodes(
+        self, nodes: _HasNodes, indices: _Indices, params: Optional[PrescribedParams] = None
+    ) -> PrescribedHandle:
+        """Prescribe the nodes `indices` (local to the object); targets start at their positions."""
+    def set_transform(
+        self, prescribed: _HasPrescribed, translation: _Vector, rotation: Optional[_Rotation] = None
+    ) -> None:
+        """Targets become `R·p + translation` for the reference positions `p`."""
+    def set_transform_deg(self, prescribed: _HasPrescribed, translation: _Vector, angle_deg: float, axis: _Vector) -> None:
+        """`set_transform` with a rotation by `angle_deg` about `axis` through the origin."""
+    def set_target(self, prescribed: _HasPrescribed, i: int, target: _Vector) -> None:
+        """Set the target of the `i`-th node of a prescribed group, m."""
+    def targets(self, prescribed: _HasPrescribed) -> NDArray[np.float64]:
+        """Targets of a prescribed group, m: a new (n, 3) array."""
+    def prescribed_nodes(self, prescribed: _HasPrescribed) -> list[int]:
+        """Global node indices of a prescribed group."""
+    def max_violation(self, prescribed: _HasPrescribed) -> float:
+        """Largest distance of a prescribed group's nodes to their targets, m."""
+    def mass(self, inertia: Union[InertiaHandle, Surface, Volume, Line]) -> float:
+        """Total mass of an object's inertia group, kg."""
+    def count_inverted_tets(self) -> int:
+        """Number of inverted tets at the current positions."""
+
+    # Parameters of any model
+    @overload
+    def params(self, handle: InertiaHandle) -> InertiaParams:
+        """The parameters of a handle (a copy: change it and `set_params` it back)."""
+    @overload
+    def params(self, handle: TriangleStrainHandle) -> TriangleStrainParams: ...
+    @overload
+    def params(self, handle: TetStrainHandle) -> TetStrainParams: ...
+    @overload
+    def params(self, handle: SegmentStrainHandle) -> SegmentStrainParams: ...
+    @overload
+    def params(self, handle: FlatBendingHandle) -> FlatBendingParams: ...
+    @overload
+    def params(self, handle: DihedralBendingHandle) -> DihedralBendingParams: ...
+    @overload
+    def params(self, handle: PrescribedHandle) -> PrescribedParams: ...
+    @overload
+    def params(self, handle: RigidBody) -> RigidBodyParams: ...
+    def set_params(self, handle: _ModelHandle, params: _ModelParams) -> None:
+        """Replace the parameters of a handle (checked: raises StarkError naming the field)."""
+
+    # Attachments
+    def add_attachment_point_point(
+        self,
+        label: str,
+        a: _HasNodes,
+        points_a: _Indices,
+        b: _HasNodes,
+        points_b: _Indices,
+        params: Optional[AttachmentParams] = None,
+    ) -> AttachmentHandle:
+        """Glue node `points_a[i]` of `a` to node `points_b[i]` of `b`."""
+    def add_attachment_point_edge(
+        self,
+        label: str,
+        a: _HasNodes,
+        points: _Indices,
+        b: _HasNodes,
+        edges: _Indices,
+        edge_parameters: ArrayLike,
+        params: Optional[AttachmentParams] = None,
+    ) -> AttachmentHandle:
+        """Glue node `points[i]` of `a` to the point `(1 − t) e0 + t e1` of edge `edges[i]` of `b`."""
+    def add_attachment_point_triangle(
+        self,
+        label: str,
+        a: _HasNodes,
+        points: _Indices,
+        b: _HasNodes,
+        triangles: _Indices,
+        barycentric: _Points,
+        params: Optional[AttachmentParams] = None,
+    ) -> AttachmentHandle:
+        """Glue node `points[i]` of `a` to the point with barycentric coordinates `barycentric[i]` of `triangles[i]`."""
+    def attachment_gap(self, attachment: AttachmentHandle) -> float:
+        """Largest gap of an attachment group at the current positions, m."""
+
+    # Contact
+    def contact_objects(self) -> list[ContactHandle]:
+        """All contact objects, in creation order."""
+    def contact_object(self, label: str) -> Optional[ContactHandle]:
+        """The contact object labelled `label`, or None."""
+    def contact_label(self, contact: _HasContact) -> str:
+        """Label of a contact object."""
+    def contact_thickness(self, contact: _HasContact) -> float:
+        """Contact thickness of an object, m."""
+    def set_contact_thickness(self, contact: _HasContact, thickness_m: float) -> None:
+        """Change an object's contact thickness, m."""
+    def set_friction(self, a: _HasContact, b: _HasContact, mu: float) -> None:
+        """Friction coefficient μ between two objects (`a` = `b`: self-friction); unset pairs have 0."""
+    def friction(self, a: _HasContact, b: _HasContact) -> float:
+        """Friction coefficient between two objects."""
+    def set_collision(self, a: _HasContact, b: _HasContact, enabled: bool) -> None:
+        """Switch collisions between two objects (`a` = `b`: self-collision) on or off."""
+    def disable_collision(self, a: _HasContact, b: _HasContact) -> None:
+        """Switch collisions between two objects off."""
+    def contact_stats(self) -> _Report:
+        """Contact statistics of the last step (active pairs, smallest distance, κ, CCD) as a dict."""
+    def find_intersections(self) -> list[str]:
+        """Descriptions of all intersecting edge–triangle pairs of the contact surfaces now."""
+
+    # Rigid bodies
+    def add_rigid_body(
+        self,
+        label: str,
+        mass: float,
+        inertia: ArrayLike,
+        position: Optional[_Vector] = None,
+        orientation: Optional[_Rotation] = None,
+    ) -> RigidBody:
+        """Add a rigid body of `mass` (kg) and body-frame inertia tensor (3, 3); it starts at rest."""
+    def add_rigid_body_with(
+        self,
+        label: str,
+        mass_properties: MassProperties,
+        position: Optional[_Vector] = None,
+        orientation: Optional[_Rotation] = None,
+    ) -> RigidBody:
+        """Add a rigid body from its mass properties; its centre of mass goes to `position`."""
+    def add_rigid_collision_mesh(
+        self, body: _HasBody, vertices: _Points, triangles: _Indices, thickness_m: Optional[float] = None
+    ) -> RigidMesh:
+        """Give a body a collision mesh (vertices in the body frame, relative to its centre of mass)."""
+    def rigid_body(self, label: str) -> Optional[RigidBody]:
+        """The rigid body labelled `label`, or None."""
+    def rigid_bodies(self) -> list[RigidBody]:
+        """All rigid bodies, in creation order."""
+    def body_position(self, body: _HasBody) -> NDArray[np.float64]:
+        """Centre of mass of a body, m."""
+    def body_orientation(self, body: _HasBody) -> NDArray[np.float64]:
+        """Orientation of a body (body → world) as a quaternion (w, x, y, z)."""
+    def body_rotation(self, body: _HasBody) -> NDArray[np.float64]:
+        """Rotation matrix of a body (body → world), (3, 3)."""
+    def body_velocity(self, body: _HasBody) -> NDArray[np.float64]:
+        """Linear velocity of a body's centre of mass, m/s."""
+    def body_angular_velocity(self, body: _HasBody) -> NDArray[np.float64]:
+        """Angular velocity of a body (world frame), rad/s."""
+    def body_angular_momentum(self, body: _HasBody) -> NDArray[np.float64]:
+        """Angular momentum of a body about its centre of mass (world), kg·m²/s."""
+    def body_mass(self, body: _HasBody) -> float:
+        """Mass of a body, kg."""
+    def body_inertia(self, body: _HasBody) -> NDArray[np.float64]:
+        """Body-frame inertia tensor of a body about its centre of mass, kg·m², (3, 3)."""
+    def body_force(self, body: _HasBody) -> NDArray[np.float64]:
+        """External force on a body's centre of mass, N."""
+    def body_torque(self, body: _HasBody) -> NDArray[np.float64]:
+        """External torque on a body, N·m."""
+    def body_point_to_world(self, body: _HasBody, points: Union[_Vector, _Points]) -> NDArray[np.float64]:
+        """World positions of body-frame points: (3,) → (3,), (n, 3) → (n, 3)."""
+    def body_point_to_local(self, body: _HasBody, points: Union[_Vector, _Points]) -> NDArray[np.float64]:
+        """Body-frame coordinates of world points: (3,) → (3,), (n, 3) → (n, 3)."""
+    def body_direction_to_world(self, body: _HasBody, directions: Union[_Vector, _Points]) -> NDArray[np.float64]:
+        """World directions of body-frame directions."""
+    def body_direction_to_local(self, body: _HasBody, directions: Union[_Vector, _Points]) -> NDArray[np.float64]:
+        """Body-frame directions of world directions."""
+    def body_velocity_at(self, body: _HasBody, points: Union[_Vector, _Points]) -> NDArray[np.float64]:
+        """Velocities of world points moving with the body, m/s."""
+    def set_body_pose(self, body: _HasBody, position: _Vector, orientation: Optional[_Rotation] = None) -> None:
+        """Move a body: centre of mass to `position` (m), orientation to `orientation` (its mesh follows)."""
+    def set_body_velocity(self, body: _HasBody, velocity: _Vector) -> None:
+        """Set the linear velocity of a body's centre of mass, m/s."""
+    def set_body_angular_velocity(self, body: _HasBody, angular_velocity: _Vector) -> None:
+        """Set the angular velocity of a body (world frame), rad/s."""
+    def set_body_force(self, body: _HasBody, force: _Vector) -> None:
+        """Set the external force at a body's centre of mass (persists until changed), N."""
+    def set_body_torque(self, body: _HasBody, torque: _Vector) -> None:
+        """Set the external torque on a body (persists until changed), N·m."""
+    def add_body_force_at(self, body: _HasBody, force: _Vector, at: _Vector) -> None:
+        """Add a force applied at the world point `at` (a force plus the torque (at − c) × f)."""
+    def set_body_acceleration(self, body: _HasBody, acceleration: _Vector) -> None:
+        """Set the external acceleration of a body (added to gravity; persists), m/s²."""
+    def set_body_angular_acceleration(self, body: _HasBody, angular_acceleration: _Vector) -> None:
+        """Set the external angular acceleration of a body (persists), rad/s²."""
+    def set_body_mass(self, body: _HasBody, mass: float, inertia: ArrayLike) -> None:
+        """Change the mass (kg) and body-frame inertia tensor (kg·m², (3, 3)) of a body."""
+
+# ------------------------------------------------------------------------------------------
+# Scenes
+# ------------------------------------------------------------------------------------------
+
+@final
+class Scene:
+    """A simulation built from a scene file or a built-in scene, ready to `run(duration_s)`."""
+    @property
+    def simulation(self) -> Simulation:
+        """The simulation with every object, boundary condition and event of the scene."""
+    @property
+    def duration_s(self) -> float:
+        """Simulated time the scene asks for, s."""
+    @property
+    def name(self) -> str:
+        """Scene name."""
+    @property
+    def objects(self) -> dict[str, Union[Surface, Volume, Line, Obstacle]]:
+        """The objects by name (scene files only)."""
+    @property
+    def prescribed(self) -> list[dict[str, Any]]:
+        """The `[[prescribed]]` entries in file order: dicts with `object`, `handle` and `nodes`."""
+    @property
+    def attachments(self) -> dict[str, AttachmentHandle]:
+        """The `[[attachment]]` entries by label."""
+    def run(self, duration: Optional[float] = None, callback: Optional[Callable[[Simulation], Any]] = None) -> _Report:
+        """Run the scene for `duration` seconds (default: its own duration); returns the run summary."""
+
+def load_scene(
+    path: Union[str, os.PathLike[str]],
+    output_directory: Optional[Union[str, os.PathLike[str]]] = None,
+    threads: Optional[int] = None,
+    frames: Optional[bool] = None,
+    step_log: Optional[bool] = None,
+) -> Scene:
+    """Load a scene file (TOML, or JSON if the name ends in `.json`); the options override the file's."""
+
+def parse_scene(
+    text: str,
+    file_name: str = "scene.toml",
+    base_dir: Union[str, os.PathLike[str]] = ...,
+    output_directory: Optional[Union[str, os.PathLike[str]]] = None,
+    threads: Optional[int] = None,
+    frames: Optional[bool] = None,
+    step_log: Optional[bool] = None,
+) -> Scene:
+    """Build a scene from its text; `file_name` names it in errors and picks the format."""
+
+def builtin_scenes() -> list[dict[str, Any]]:
+    """The built-in scenes: a list of dicts with `name`, `description` and `duration_s`."""
+
+def builtin_scene(name: str, settings: Optional[Settings] = None) -> Scene:
+    """Build the built-in scene `name`; `settings` provides the base settings."""

@@ -1,0 +1,588 @@
+//! Plain-data classes mirroring the library's settings, energy parameters and materials.
+//!
+//! Each class has every field of its Rust struct as a read/write attribute (same names, same
+//! units, same defaults), a keyword constructor (`InertiaParams(density=0.2)`), `to_dict()`,
+//! `copy()` and `==`. Nested settings (`settings.newton`, `material.strain`) are shared objects,
+//! so `material.strain.youngs_modulus = 1e4` changes the material. Values are checked when they
+//! enter a simulation (`Simulation(settings)`, `add_surface`, `set_params`), with the library's
+//! messages.
+
+use crate::convert::{stark_err, Arr3};
+use pyo3::exceptions::{PyAttributeError, PyTypeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyString};
+use serde::de::DeserializeOwned;
+use serde::Serialize;
+use std::path::PathBuf;
+
+/// A Python class that mirrors a Rust struct.
+pub trait Mirror: Sized {
+    /// The Rust struct.
+    type Rust;
+    /// A Python value from the Rust one.
+    fn from_rust(py: Python<'_>, r: &Self::Rust) -> PyResult<Self>;
+    /// The Rust value.
+    fn to_rust(&self, py: Python<'_>) -> PyResult<Self::Rust>;
+}
+
+/// A field of a mirror class and the Rust field it stands for.
+pub trait Field<R>: Sized {
+    /// The Python field from the Rust field.
+    fn from_field(py: Python<'_>, r: &R) -> PyResult<Self>;
+    /// The Rust field.
+    fn to_field(&self, py: Python<'_>) -> PyResult<R>;
+}
+
+macro_rules! identity_field {
+    ($($t:ty),*) => {$(
+        impl Field<$t> for $t {
+            fn from_field(_py: Python<'_>, r: &$t) -> PyResult<Self> {
+                Ok(r.clone())
+            }
+            fn to_field(&self, _py: Python<'_>) -> PyResult<$t> {
+                Ok(self.clone())
+            }
+        }
+    )*};
+}
+identity_field!(f64, bool, usize, String, Option<f64>, PathBuf);
+
+impl Field<[f64; 3]> for Arr3 {
+    fn from_field(_py: Python<'_>, r: &[f64; 3]) -> PyResult<Self> {
+        Ok(Arr3(*r))
+    }
+    fn to_field(&self, _py: Python<'_>) -> PyResult<[f64; 3]> {
+        Ok(self.0)
+    }
+}
+
+impl<M: Mirror + pyo3::PyClass<Frozen = pyo3::pyclass::boolean_struct::False> + Into<pyo3::PyClassInitializer<M>>>
+    Field<M::Rust> for Py<M>
+{
+    fn from_field(py: Python<'_>, r: &M::Rust) -> PyResult<Self> {
+        Py::new(py, M::from_rust(py, r)?)
+    }
+    fn to_field(&self, py: Python<'_>) -> PyResult<M::Rust> {
+        self.bind(py).borrow().to_rust(py)
+    }
+}
+
+/// A Rust enum shown as its snake_case name (`"pcg"`, `"cholesky"`); assigning an unknown name
+/// raises `ValueError` at once.
+#[derive(Clone, Copy, Debug)]
+pub struct Choice<E>(pub E);
+
+impl<E: Clone> Field<E> for Choice<E> {
+    fn from_field(_py: Python<'_>, r: &E) -> PyResult<Self> {
+        Ok(Choice(r.clone()))
+    }
+    fn to_field(&self, _py: Python<'_>) -> PyResult<E> {
+        Ok(self.0.clone())
+    }
+}
+
+impl<'py, E: Serialize> IntoPyObject<'py> for Choice<E> {
+    type Target = PyString;
+    type Output = Bound<'py, PyString>;
+    type Error = PyErr;
+    fn into_pyobject(self, py: Python<'py>) -> PyResult<Self::Output> {
+        match serde_json::to_value(&self.0) {
+            Ok(serde_json::Value::String(s)) => Ok(PyString::new(py, &s)),
+            _ => Err(stark_err("enum value has no name")),
+        }
+    }
+}
+
+impl<'a, 'py, E: DeserializeOwned> FromPyObject<'a, 'py> for Choice<E> {
+    type Error = PyErr;
+    fn extract(obj: Borrowed<'a, 'py, PyAny>) -> PyResult<Self> {
+        let s: String = obj.extract()?;
+        serde_json::from_value(serde_json::Value::String(s.clone()))
+            .map(Choice)
+            .map_err(|e| PyValueError::new_err(format!("'{s}': {e}")))
+    }
+}
+
+/// Defines a mirror class: the struct with every field as an attribute, its conversions, a
+/// keyword constructor, `__repr__`, `==`, `to_dict()` and `copy()`.
+macro_rules! mirror {
+    (
+        $(#[$doc:meta])*
+        $name:ident => $rust:path {
+            $( $(#[$fdoc:meta])* $field:ident : $ty:ty ),* $(,)?
+        }
+    ) => {
+        $(#[$doc])*
+        #[pyclass(module = "starkrs", get_all, set_all)]
+        pub struct $name {
+            $( $(#[$fdoc])* pub $field: $ty, )*
+        }
+
+        impl $crate::params::Mirror for $name {
+            type Rust = $rust;
+            fn from_rust(py: Python<'_>, r: &$rust) -> PyResult<Self> {
+                #[allow(unused_imports)]
+                use $crate::params::Field;
+                Ok(Self { $( $field: Field::from_field(py, &r.$field)?, )* })
+            }
+            fn to_rust(&self, py: Python<'_>) -> PyResult<$rust> {
+                #[allow(unused_imports)]
+                use $crate::params::Field;
+                type R = $rust;
+                Ok(R { $( $field: self.$field.to_field(py)?, )* })
+            }
+        }
+
+        impl $name {
+            /// The attribute names.
+            pub const FIELDS: &'static [&'static str] = &[$(stringify!($field)),*];
+        }
+
+        #[pymethods]
+        impl $name {
+            /// Defaults of the library, with the given fields replaced.
+            #[new]
+            #[pyo3(signature = (**fields))]
+            fn py_new(py: Python<'_>, fields: Option<&Bound<'_, PyDict>>) -> PyResult<Self> {
+                use $crate::params::Mirror;
+                let mut me = Self::from_rust(py, &<$rust as Default>::default())?;
+                if let Some(fields) = fields {
+                    for (k, v) in fields.iter() {
+                        let k: String = k.extract()?;
+                        match k.as_str() {
+                            $( stringify!($field) => me.$field = v.extract()?, )*
+                            _ => {
+                                return Err(PyAttributeError::new_err(format!(
+                                    "{} has no field '{}' (fields: {})",
+                                    stringify!($name),
+                                    k,
+                                    Self::FIELDS.join(", ")
+                                )))
+                            }
+                        }
+                    }
+                }
+                Ok(me)
+            }
+
+            fn __repr__(slf: &Bound<'_, Self>) -> PyResult<String> {
+                let mut parts = Vec::new();
+                for f in Self::FIELDS {
+                    parts.push(format!("{}={}", f, slf.getattr(*f)?.repr()?));
+                }
+                Ok(format!("{}({})", stringify!($name), parts.join(", ")))
+            }
+
+            fn __eq__(&self, py: Python<'_>, other: &Bound<'_, PyAny>) -> PyResult<bool> {
+                use $crate::params::Mirror;
+                match other.cast::<Self>() {
+                    Ok(o) => Ok(self.to_rust(py)? == o.borrow().to_rust(py)?),
+                    Err(_) => Ok(false),
+                }
+            }
+
+            /// The fields as a plain dict (nested settings as nested dicts).
+            fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+                use $crate::params::Mirror;
+                $crate::convert::to_python(py, &self.to_rust(py)?)
+            }
+
+            /// A deep copy (nested settings are copied too).
+            fn copy(&self, py: Python<'_>) -> PyResult<Self> {
+                use $crate::params::Mirror;
+                Self::from_rust(py, &self.to_rust(py)?)
+            }
+
+            fn __copy__(&self, py: Python<'_>) -> PyResult<Self> {
+                self.copy(py)
+            }
+
+            fn __deepcopy__(&self, py: Python<'_>, _memo: &Bound<'_, PyAny>) -> PyResult<Self> {
+                self.copy(py)
+            }
+        }
+    };
+}
+
+// ---------------------------------------------------------------------------------------------
+// Settings
+// ---------------------------------------------------------------------------------------------
+
+mirror! {
+    /// Newton solver settings (`settings.newton`).
+    NewtonSettings => stark::solver::settings::NewtonSettings {
+        /// A step converges when the force residual falls below this, N (default: 1e-6).
+        residual_tolerance_n: f64,
+        /// A step also converges when the Newton step falls below this, m/s; 0 disables it (default: 0).
+        step_tolerance_m_s: f64,
+        /// Newton iterations before the step counts as failed and dt is halved (default: 100).
+        max_iterations: usize,
+        /// Linear solver: "pcg" or "cholesky" (default: "pcg").
+        linear_solver: Choice<stark::solver::settings::LinearSolver>,
+        /// Largest number of CG iterations per solve (default: 10000).
+        cg_max_iterations: usize,
+        /// Relative CG tolerance at the first Newton iteration (default: 1e-2).
+        cg_relative_tolerance: f64,
+        /// Armijo sufficient-decrease constant (default: 1e-4).
+        armijo: f64,
+        /// Largest number of step halvings in the line search (default: 30).
+        max_line_search_iterations: usize,
+        /// When element Hessians are projected: "always" or "on_demand" (default: "on_demand").
+        projection: Choice<stark::solver::settings::Projection>,
+    }
+}
+
+mirror! {
+    /// Frame and log output (`settings.output`).
+    OutputSettings => stark::solver::settings::OutputSettings {
+        /// Directory for frames and logs (default: "output").
+        directory: PathBuf,
+        /// Frames per simulated second; 0 disables frames (default: 30).
+        fps: f64,
+        /// Write VTK frames (default: True).
+        frames: bool,
+        /// Write the per-step log `<name>.steps.jsonl` (default: True).
+        step_log: bool,
+    }
+}
+
+mirror! {
+    /// Contact settings (`settings.contact`).
+    ContactSettings => stark::contact::ContactSettings {
+        /// Contact thickness of objects that set none, m; None: such objects take no part in contact (default: None).
+        default_thickness_m: Option<f64>,
+        /// Barrier function: "log" (IPC, infinite at contact) or "cubic" (the original Stark's) (default: "log").
+        barrier: Choice<stark::contact::BarrierKind>,
+        /// Barrier stiffness κ, N/m; None chooses m̄/dt² (default: None).
+        stiffness: Option<f64>,
+        /// κ doubles after a step in which a pair came closer than this fraction of its d̂ (default: 1e-3).
+        min_distance_fraction: f64,
+        /// Upper bound of the adaptive κ relative to its initial value (default: 1e8).
+        max_stiffness_factor: f64,
+        /// Relative speed below which friction sticks, m/s (default: 0.01).
+        friction_stick_slide_threshold_m_s: f64,
+        /// Friction solves per step (default: 1).
+        friction_iterations: usize,
+        /// Barrier pair Hessian: "exact", "projected" or "gauss_newton" (default: "projected").
+        hessian: Choice<stark::contact::PairHessian>,
+        /// Continuous collision detection in the line search (default: True).
+        ccd: bool,
+    }
+}
+
+mirror! {
+    /// Everything that configures a simulation run. `Settings()` has the library's defaults.
+    Settings => stark::Settings {
+        /// Name, used for output files (default: "simulation").
+        name: String,
+        /// Largest (and initial) time step, s (default: 1/30).
+        time_step_s: f64,
+        /// Halve dt on a failed step and grow it back after successes (default: True).
+        adaptive_time_step: bool,
+        /// Smallest dt before the simulation gives up, s (default: 1e-6).
+        min_time_step_s: f64,
+        /// Factor dt grows by after each successful step (default: 1.5).
+        time_step_growth: f64,
+        /// Gravity, m/s² (default: (0, 0, -9.81)).
+        gravity_m_s2: Arr3,
+        /// Worker threads; 0 uses all cores (default: 0).
+        threads: usize,
+        /// Newton solver settings.
+        newton: Py<NewtonSettings>,
+        /// Output settings.
+        output: Py<OutputSettings>,
+        /// Contact settings.
+        contact: Py<ContactSettings>,
+        /// Largest number of times one step is repeated after a model hardened a stiffness (default: 40).
+        max_hardening_retries: usize,
+    }
+}
+
+#[pymethods]
+impl Settings {
+    /// Check the values; raises `StarkError` naming the field.
+    fn validate(&self, py: Python<'_>) -> PyResult<()> {
+        self.to_rust(py)?.validate().map_err(crate::convert::to_py_err)
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Energy parameters
+// ---------------------------------------------------------------------------------------------
+
+mirror! {
+    /// Lumped inertia of a deformable object.
+    InertiaParams => stark::deformables::InertiaParams {
+        /// Density per unit length, area or volume: kg/m, kg/m² or kg/m³ (default: 1).
+        density: f64,
+        /// Inertial damping, 1/s: a drag force −m·d·v (default: 0).
+        damping: f64,
+        /// Drop the kinetic terms: each step solves for static equilibrium (default: False).
+        quasistatic: bool,
+    }
+}
+
+mirror! {
+    /// Membrane strain of a shell or cloth (Neo-Hookean triangles with strain limiting).
+    TriangleStrainParams => stark::deformables::TriangleStrainParams {
+        /// Shell thickness, m.
+        thickness_m: f64,
+        /// Young's modulus, Pa.
+        youngs_modulus: f64,
+        /// Poisson's ratio.
+        poissons_ratio: f64,
+        /// Strain-rate damping, Pa·s.
+        damping: f64,
+        /// Largest principal strain before the limiting penalty starts (inf: off).
+        strain_limit: f64,
+        /// Stiffness of the strain-limiting penalty, Pa.
+        strain_limit_stiffness: f64,
+        /// Inflation pressure, Pa.
+        inflation_pa: f64,
+        /// Factor on the whole energy.
+        scale: f64,
+    }
+}
+
+mirror! {
+    /// Volumetric strain of a solid (Stable Neo-Hookean tets with strain limiting).
+    TetStrainParams => stark::deformables::TetStrainParams {
+        /// Young's modulus, Pa.
+        youngs_modulus: f64,
+        /// Poisson's ratio.
+        poissons_ratio: f64,
+        /// Strain-rate damping, Pa·s.
+        damping: f64,
+        /// Largest principal strain before the limiting penalty starts (inf: off).
+        strain_limit: f64,
+        /// Stiffness of the strain-limiting penalty, Pa.
+        strain_limit_stiffness: f64,
+        /// Factor on the whole energy.
+        scale: f64,
+    }
+}
+
+mirror! {
+    /// Axial strain of a rod or cable made of segments.
+    SegmentStrainParams => stark::deformables::SegmentStrainParams {
+        /// Radius of the cross-section, m.
+        section_radius_m: f64,
+        /// Young's modulus, Pa.
+        youngs_modulus: f64,
+        /// Strain-rate damping, Pa·s.
+        damping: f64,
+        /// Largest strain before the limiting penalty starts (inf: off).
+        strain_limit: f64,
+        /// Stiffness of the strain-limiting penalty, Pa.
+        strain_limit_stiffness: f64,
+        /// Factor on the whole energy.
+        scale: f64,
+    }
+}
+
+mirror! {
+    /// Quadratic bending towards the flat state (cloth).
+    FlatBendingParams => stark::deformables::FlatBendingParams {
+        /// Bending stiffness, N·m.
+        stiffness: f64,
+        /// Bending damping, N·m·s.
+        damping: f64,
+    }
+}
+
+mirror! {
+    /// Discrete-shell bending towards the rest dihedral angles (curved shells).
+    DihedralBendingParams => stark::deformables::DihedralBendingParams {
+        /// Bending stiffness, N·m.
+        stiffness: f64,
+        /// Bending damping, N·m·s.
+        damping: f64,
+    }
+}
+
+mirror! {
+    /// Prescribed positions: nodes pulled to targets by stiff springs hardened to a tolerance.
+    PrescribedParams => stark::deformables::PrescribedParams {
+        /// Spring stiffness, N/m.
+        stiffness: f64,
+        /// Largest allowed distance to the target after a step, m (inf: no hardening).
+        tolerance_m: f64,
+    }
+}
+
+mirror! {
+    /// Attachments between deformable objects: stiff springs hardened to a tolerance.
+    AttachmentParams => stark::deformables::AttachmentParams {
+        /// Spring stiffness, N/m (default: 1e3).
+        stiffness: f64,
+        /// Largest allowed gap after a step, m (default: inf, no hardening).
+        tolerance_m: f64,
+    }
+}
+
+mirror! {
+    /// Damping of a rigid body.
+    RigidBodyParams => stark::rigidbodies::RigidBodyParams {
+        /// Linear velocity damping, 1/s (default: 0).
+        linear_damping_1_s: f64,
+        /// Angular velocity damping, 1/s (default: 0).
+        angular_damping_1_s: f64,
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Materials
+// ---------------------------------------------------------------------------------------------
+
+mirror! {
+    /// Material of a rod or cable: inertia, axial strain and contact thickness.
+    LineMaterial => stark::presets::LineMaterial {
+        /// Inertia (density in kg/m).
+        inertia: Py<InertiaParams>,
+        /// Axial strain.
+        strain: Py<SegmentStrainParams>,
+        /// Contact thickness, m; None uses settings.contact.default_thickness_m.
+        contact_thickness_m: Option<f64>,
+    }
+}
+
+#[pymethods]
+impl LineMaterial {
+    /// Elastic rubber band: 0.05 kg/m, r = 2 mm, E = 1e4 Pa, strain limit 10%.
+    #[staticmethod]
+    fn elastic_rubber_band(py: Python<'_>) -> PyResult<Self> {
+        Self::from_rust(py, &stark::presets::LineMaterial::elastic_rubber_band())
+    }
+}
+
+mirror! {
+    /// Material of a solid: inertia, volumetric strain and contact thickness.
+    VolumeMaterial => stark::presets::VolumeMaterial {
+        /// Inertia (density in kg/m³).
+        inertia: Py<InertiaParams>,
+        /// Volumetric strain.
+        strain: Py<TetStrainParams>,
+        /// Contact thickness, m; None uses settings.contact.default_thickness_m.
+        contact_thickness_m: Option<f64>,
+    }
+}
+
+#[pymethods]
+impl VolumeMaterial {
+    /// Soft rubber: 1000 kg/m³, E = 1e4 Pa, ν = 0.3, strain limit 100%, inertial damping 0.1/s.
+    #[staticmethod]
+    fn soft_rubber(py: Python<'_>) -> PyResult<Self> {
+        Self::from_rust(py, &stark::presets::VolumeMaterial::soft_rubber())
+    }
+}
+
+/// The bending of a surface material: None, a `FlatBendingParams` or a `DihedralBendingParams`.
+pub enum BendingField {
+    /// No bending stiffness.
+    None,
+    /// Flat bending.
+    Flat(Py<FlatBendingParams>),
+    /// Discrete-shell bending.
+    Dihedral(Py<DihedralBendingParams>),
+}
+
+impl Field<stark::presets::Bending> for BendingField {
+    fn from_field(py: Python<'_>, r: &stark::presets::Bending) -> PyResult<Self> {
+        use stark::presets::Bending as B;
+        Ok(match r {
+            B::None => BendingField::None,
+            B::Flat(p) => BendingField::Flat(Py::new(py, FlatBendingParams::from_rust(py, p)?)?),
+            B::Dihedral(p) => BendingField::Dihedral(Py::new(py, DihedralBendingParams::from_rust(py, p)?)?),
+        })
+    }
+    fn to_field(&self, py: Python<'_>) -> PyResult<stark::presets::Bending> {
+        use stark::presets::Bending as B;
+        Ok(match self {
+            BendingField::None => B::None,
+            BendingField::Flat(p) => B::Flat(p.bind(py).borrow().to_rust(py)?),
+            BendingField::Dihedral(p) => B::Dihedral(p.bind(py).borrow().to_rust(py)?),
+        })
+    }
+}
+
+impl<'a, 'py> FromPyObject<'a, 'py> for BendingField {
+    type Error = PyErr;
+    fn extract(obj: Borrowed<'a, 'py, PyAny>) -> PyResult<Self> {
+        if obj.is_none() {
+            Ok(BendingField::None)
+        } else if let Ok(p) = obj.cast::<FlatBendingParams>() {
+            Ok(BendingField::Flat(p.to_owned().unbind()))
+        } else if let Ok(p) = obj.cast::<DihedralBendingParams>() {
+            Ok(BendingField::Dihedral(p.to_owned().unbind()))
+        } else {
+            Err(PyTypeError::new_err(
+                "bending must be None, a FlatBendingParams or a DihedralBendingParams",
+            ))
+        }
+    }
+}
+
+impl<'py> IntoPyObject<'py> for &BendingField {
+    type Target = PyAny;
+    type Output = Bound<'py, PyAny>;
+    type Error = PyErr;
+    fn into_pyobject(self, py: Python<'py>) -> PyResult<Self::Output> {
+        Ok(match self {
+            BendingField::None => py.None().into_bound(py),
+            BendingField::Flat(p) => p.bind(py).clone().into_any(),
+            BendingField::Dihedral(p) => p.bind(py).clone().into_any(),
+        })
+    }
+}
+
+mirror! {
+    /// Material of a shell or cloth: inertia, membrane strain, bending and contact thickness.
+    SurfaceMaterial => stark::presets::SurfaceMaterial {
+        /// Inertia (density in kg/m²).
+        inertia: Py<InertiaParams>,
+        /// Membrane strain.
+        strain: Py<TriangleStrainParams>,
+        /// Bending: None, FlatBendingParams or DihedralBendingParams.
+        bending: BendingField,
+        /// Contact thickness, m; None uses settings.contact.default_thickness_m.
+        contact_thickness_m: Option<f64>,
+    }
+}
+
+#[pymethods]
+impl SurfaceMaterial {
+    /// Cotton fabric: 0.2 kg/m², 1 mm thick, E = 5e3 Pa, ν = 0.3, strain limit 10%, flat bending 1e-6 N·m.
+    #[staticmethod]
+    fn cotton_fabric(py: Python<'_>) -> PyResult<Self> {
+        Self::from_rust(py, &stark::presets::SurfaceMaterial::cotton_fabric())
+    }
+}
+
+/// Convert an optional Python settings object into Rust settings (defaults for None).
+pub fn settings_from(py: Python<'_>, s: Option<&Bound<'_, Settings>>) -> PyResult<stark::Settings> {
+    match s {
+        Some(s) => s.borrow().to_rust(py),
+        None => Ok(stark::Settings::default()),
+    }
+}
+
+/// Register the classes.
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<Settings>()?;
+    m.add_class::<NewtonSettings>()?;
+    m.add_class::<OutputSettings>()?;
+    m.add_class::<ContactSettings>()?;
+    m.add_class::<InertiaParams>()?;
+    m.add_class::<TriangleStrainParams>()?;
+    m.add_class::<TetStrainParams>()?;
+    m.add_class::<SegmentStrainParams>()?;
+    m.add_class::<FlatBendingParams>()?;
+    m.add_class::<DihedralBendingParams>()?;
+    m.add_class::<PrescribedParams>()?;
+    m.add_class::<AttachmentParams>()?;
+    m.add_class::<RigidBodyParams>()?;
+    m.add_class::<LineMaterial>()?;
+    m.add_class::<VolumeMaterial>()?;
+    m.add_class::<SurfaceMaterial>()?;
+    Ok(())
+}

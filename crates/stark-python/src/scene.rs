@@ -1,0 +1,189 @@
+//! Scene files and built-in scenes.
+
+use crate::convert::{guarded, stark_err};
+use crate::handles::{AttachmentHandle, Line, Obstacle, PrescribedHandle, Surface, Volume};
+use crate::params;
+use crate::simulation::Simulation;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+use std::path::PathBuf;
+
+/// A simulation built from a scene file or a built-in scene, ready to `run(duration_s)`.
+#[pyclass(module = "starkrs", frozen, get_all)]
+pub struct Scene {
+    /// The simulation with every object, boundary condition and event of the scene.
+    pub simulation: Py<Simulation>,
+    /// Simulated time the scene asks for, s.
+    pub duration_s: f64,
+    /// Scene name.
+    pub name: String,
+    /// The objects by name: Surface, Volume, Line or Obstacle handles (scene files only).
+    pub objects: Py<PyDict>,
+    /// The `[[prescribed]]` entries in file order: dicts with `object`, `handle` and `nodes`.
+    pub prescribed: Py<PyList>,
+    /// The `[[attachment]]` entries by label.
+    pub attachments: Py<PyDict>,
+}
+
+#[pymethods]
+impl Scene {
+    /// Run the scene for `duration` seconds (default: its own duration); returns the run summary.
+    #[pyo3(signature = (duration=None, callback=None))]
+    fn run<'py>(
+        &self,
+        py: Python<'py>,
+        duration: Option<f64>,
+        callback: Option<Py<PyAny>>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        self.simulation
+            .bind(py)
+            .call_method1("run", (duration.unwrap_or(self.duration_s), callback))
+    }
+
+    fn __repr__(&self) -> String {
+        format!("Scene('{}', duration_s={})", self.name, self.duration_s)
+    }
+}
+
+fn configure(
+    s: &mut stark::Settings,
+    output_directory: Option<PathBuf>,
+    threads: Option<usize>,
+    frames: Option<bool>,
+    step_log: Option<bool>,
+) {
+    if let Some(d) = output_directory {
+        s.output.directory = d;
+    }
+    if let Some(t) = threads {
+        s.threads = t;
+    }
+    if let Some(f) = frames {
+        s.output.frames = f;
+    }
+    if let Some(l) = step_log {
+        s.output.step_log = l;
+    }
+}
+
+fn wrap(py: Python<'_>, scene: stark::io::LoadedScene) -> PyResult<Scene> {
+    let sim = Simulation::wrap(scene.simulation);
+    let id = sim.id();
+    let objects = PyDict::new(py);
+    for (name, obj) in &scene.objects {
+        use stark::io::scene::SceneObject as O;
+        let handle: Bound<'_, PyAny> = match obj {
+            O::Surface(h) => Bound::new(py, Surface::new(py, id, name, h)?)?.into_any(),
+            O::Volume(h) => Bound::new(py, Volume::new(id, name, h))?.into_any(),
+            O::Line(h) => Bound::new(py, Line::new(id, name, h))?.into_any(),
+            O::Obstacle(h) => Bound::new(py, Obstacle::new(id, name, h))?.into_any(),
+        };
+        objects.set_item(name, handle)?;
+    }
+    let prescribed = PyList::empty(py);
+    for p in &scene.prescribed {
+        let d = PyDict::new(py);
+        d.set_item("object", &p.object)?;
+        d.set_item("handle", PrescribedHandle::new(id, p.handle))?;
+        d.set_item("nodes", p.nodes)?;
+        prescribed.append(d)?;
+    }
+    let attachments = PyDict::new(py);
+    for (label, h) in &scene.attachments {
+        attachments.set_item(label, AttachmentHandle { handle: *h, sim: id })?;
+    }
+    Ok(Scene {
+        simulation: Py::new(py, sim)?,
+        duration_s: scene.duration_s,
+        name: scene.name,
+        objects: objects.unbind(),
+        prescribed: prescribed.unbind(),
+        attachments: attachments.unbind(),
+    })
+}
+
+/// Load a scene file (TOML, or JSON if the name ends in `.json`). The optional arguments
+/// override the file's output directory, thread count, frames and step log.
+#[pyfunction]
+#[pyo3(signature = (path, output_directory=None, threads=None, frames=None, step_log=None))]
+fn load_scene(
+    py: Python<'_>,
+    path: PathBuf,
+    output_directory: Option<PathBuf>,
+    threads: Option<usize>,
+    frames: Option<bool>,
+    step_log: Option<bool>,
+) -> PyResult<Scene> {
+    let scene = py.detach(|| {
+        guarded(|| stark::io::load_scene_with(&path, |s| configure(s, output_directory, threads, frames, step_log)))
+    })?;
+    wrap(py, scene)
+}
+
+/// Build a scene from its text; `file_name` names it in errors and picks the format (JSON if it
+/// ends in `.json`); relative mesh paths are resolved against `base_dir`.
+#[pyfunction]
+#[pyo3(signature = (text, file_name="scene.toml", base_dir=PathBuf::from("."), output_directory=None, threads=None, frames=None, step_log=None))]
+fn parse_scene(
+    py: Python<'_>,
+    text: &str,
+    file_name: &str,
+    base_dir: PathBuf,
+    output_directory: Option<PathBuf>,
+    threads: Option<usize>,
+    frames: Option<bool>,
+    step_log: Option<bool>,
+) -> PyResult<Scene> {
+    let scene = guarded(|| {
+        stark::io::parse_scene_with(text, file_name, &base_dir, |s| {
+            configure(s, output_directory, threads, frames, step_log)
+        })
+    })?;
+    wrap(py, scene)
+}
+
+/// The built-in scenes: a list of dicts with `name`, `description` and `duration_s`.
+#[pyfunction]
+fn builtin_scenes(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
+    let list = PyList::empty(py);
+    for s in stark::scenes::builtin_scenes() {
+        let d = PyDict::new(py);
+        d.set_item("name", s.name)?;
+        d.set_item("description", s.description)?;
+        d.set_item("duration_s", s.duration_s)?;
+        list.append(d)?;
+    }
+    Ok(list)
+}
+
+/// Build the built-in scene `name` (see `builtin_scenes()`); `settings` provides the base
+/// settings (output directory, threads, ...), which the scene then adjusts.
+#[pyfunction]
+#[pyo3(signature = (name, settings=None))]
+fn builtin_scene(py: Python<'_>, name: &str, settings: Option<&Bound<'_, params::Settings>>) -> PyResult<Scene> {
+    let settings = params::settings_from(py, settings)?;
+    let scene = guarded(|| stark::scenes::find_scene(name))?;
+    let sim = guarded(|| (scene.build)(settings))?;
+    if sim.settings.name.is_empty() {
+        return Err(stark_err("scene without a name"));
+    }
+    let name = sim.settings.name.clone();
+    Ok(Scene {
+        simulation: Py::new(py, Simulation::wrap(sim))?,
+        duration_s: scene.duration_s,
+        name,
+        objects: PyDict::new(py).unbind(),
+        prescribed: PyList::empty(py).unbind(),
+        attachments: PyDict::new(py).unbind(),
+    })
+}
+
+/// Register the functions and classes.
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<Scene>()?;
+    m.add_function(wrap_pyfunction!(load_scene, m)?)?;
+    m.add_function(wrap_pyfunction!(parse_scene, m)?)?;
+    m.add_function(wrap_pyfunction!(builtin_scenes, m)?)?;
+    m.add_function(wrap_pyfunction!(builtin_scene, m)?)?;
+    Ok(())
+}

@@ -1,0 +1,85 @@
+"""The type stubs describe exactly the runtime API, and everything public has a docstring."""
+
+import ast
+import inspect
+from pathlib import Path
+
+import pytest
+
+import starkrs
+from starkrs import _starkrs, geometry, meshes
+
+PACKAGE = Path(starkrs.__file__).parent
+ALIASES = {"geometry", "meshes", "__version__"}
+
+
+def stub_names(path):
+    """Top-level names of a stub, and the members of each class."""
+    tree = ast.parse(path.read_text())
+    top, classes = set(), {}
+    for node in tree.body:
+        if isinstance(node, ast.ClassDef):
+            top.add(node.name)
+            members = set()
+            for item in node.body:
+                if isinstance(item, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                    members.add(item.name)
+                elif isinstance(item, ast.AnnAssign):
+                    members.add(item.target.id)
+            classes[node.name] = members
+        elif isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            top.add(node.name)
+        elif isinstance(node, ast.AnnAssign):
+            top.add(node.target.id)
+        elif isinstance(node, ast.Assign):
+            top.update(t.id for t in node.targets)
+    # Private names (`_Vector`, `_Points`, ...) are type aliases that exist only in the stubs.
+    return {n for n in top if not n.startswith("_") or n == "__version__"}, classes
+
+
+def public(obj):
+    return {n for n in dir(obj) if not n.startswith("_")}
+
+
+def test_stub_files_ship_with_the_package():
+    for name in ("__init__.pyi", "geometry.pyi", "meshes.pyi", "py.typed"):
+        assert (PACKAGE / name).exists(), name
+
+
+def test_module_stub_matches_the_runtime():
+    top, classes = stub_names(PACKAGE / "__init__.pyi")
+    runtime = public(_starkrs) - {"geometry", "meshes"}
+    assert runtime - top == set(), "missing in __init__.pyi"
+    assert top - runtime - ALIASES == set(), "in __init__.pyi but not at run time"
+    for name, members in classes.items():
+        cls = getattr(_starkrs, name)
+        if issubclass(cls, Exception):
+            continue
+        runtime_members = {n for n in vars(cls) if not n.startswith("_")}
+        assert runtime_members - members == set(), f"{name}: missing in the stub"
+        assert members - runtime_members - {"__new__", "__len__", "__copy__", "__deepcopy__"} == set(), name
+
+
+@pytest.mark.parametrize("module, stub", [(geometry, "geometry.pyi"), (meshes, "meshes.pyi")])
+def test_submodule_stubs_match_the_runtime(module, stub):
+    top, _ = stub_names(PACKAGE / stub)
+    assert public(module) == top - ALIASES
+
+
+def test_everything_public_has_a_docstring():
+    missing = []
+    for name in public(_starkrs):
+        obj = getattr(_starkrs, name)
+        if not (obj.__doc__ or "").strip():
+            missing.append(name)
+        if inspect.isclass(obj):
+            for member, value in vars(obj).items():
+                if member.startswith("_"):
+                    continue
+                if not (getattr(value, "__doc__", None) or "").strip():
+                    missing.append(f"{name}.{member}")
+    for module in (geometry, meshes):
+        for name in public(module):
+            if not (getattr(module, name).__doc__ or "").strip():
+                missing.append(f"{module.__name__}.{name}")
+    assert missing == []
