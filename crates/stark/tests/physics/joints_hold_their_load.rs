@@ -561,6 +561,13 @@ fn spring_stretches_by_load_over_stiffness_and_reports_its_damping_force() {
         ""
     );
     assert!((stretch - exact).abs() < 1e-3 * exact);
+    // Its effort is its tension, F (it pulls the body back towards the anchor).
+    let tension = rig.sim.joint_state(&j).driver_effort;
+    assert!(
+        (tension - f.norm()).abs() < 1e-3 * f.norm(),
+        "tension {tension} N vs {} N",
+        f.norm()
+    );
 }
 
 #[test]
@@ -622,6 +629,11 @@ fn spring_with_limits_is_soft_inside_and_hard_at_the_limit() {
     );
     assert!(l > max && l < max + rig.params.tolerance_m);
     assert!((spring + k * (l - l0)).abs() < 1e-6 * big.norm());
+    let tension = rig.sim.joint_state(&j).driver_effort;
+    assert!(
+        (tension - k * (l - l0)).abs() < 1e-6 * big.norm(),
+        "spring tension {tension} N"
+    );
 }
 
 /// The second body of a body–body joint, fixed to the world by a fix joint.

@@ -14,3 +14,4 @@ pub mod quasistatic_stretch_converges;
 pub mod results_are_deterministic;
 pub mod servo_reaches_and_holds;
 pub mod stark_replicas_match_reference;
+pub mod velocity_controllers_cap_their_effort;
