@@ -17,3 +17,4 @@ pub mod results_are_deterministic;
 pub mod rigid_attachment_carries_the_cloth;
 pub mod servo_reaches_and_holds;
 pub mod stark_replicas_match_reference;
+pub mod velocity_controllers_cap_their_effort;

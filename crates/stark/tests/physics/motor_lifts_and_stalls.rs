@@ -45,6 +45,12 @@ const G: f64 = 9.81;
 const DT: f64 = 0.01;
 /// The controllers' delay δ (default), rad/s or m/s.
 const DELAY: f64 = 0.01;
+/// Mass of the arm's ball, kg.
+const ARM_KG: f64 = 2.0;
+/// Lever of the arm, m.
+const LEVER_M: f64 = 0.5;
+/// Gravity's torque on the horizontal arm, m·g·r, N·m.
+const MGR: f64 = ARM_KG * G * LEVER_M;
 
 fn with_gravity(name: &str) -> Simulation {
     let mut s = settings(name, DT);
@@ -56,8 +62,6 @@ struct Arm {
     sim: Simulation,
     arm: RigidBodyHandle,
     motor: JointHandle,
-    /// m·g·r, N·m.
-    gravity_torque: f64,
     /// Moment of inertia about the pivot, kg·m².
     inertia: f64,
 }
@@ -65,7 +69,7 @@ struct Arm {
 /// A 2 kg ball on a massless 0.5 m lever from a motor at the origin with axis −y (positive
 /// angles lift the arm from +x towards +z), `angle_deg` above horizontal at the start.
 fn arm(name: &str, angle_deg: f64, target_rad_s: f64, max_torque_n_m: f64) -> Arm {
-    let (mass, r) = (2.0, 0.5);
+    let (mass, r) = (ARM_KG, LEVER_M);
     let mut sim = with_gravity(name);
     let props = MassProperties::sphere(mass, 0.05);
     let a = angle_deg.to_radians();
@@ -94,7 +98,6 @@ fn arm(name: &str, angle_deg: f64, target_rad_s: f64, max_torque_n_m: f64) -> Ar
         sim,
         arm,
         motor,
-        gravity_torque: mass * G * r,
         inertia: props.inertia_kg_m2[(1, 1)] + mass * r * r,
     }
 }
@@ -108,7 +111,7 @@ fn elevation(a: &Arm) -> f64 {
 #[test]
 fn motor_lifts_a_load_below_its_max_torque_at_the_target_speed() {
     let target = 1.0;
-    let mgr = 2.0 * G * 0.5;
+    let mgr = MGR;
     let t_max = 2.0 * mgr;
     let mut a = arm("motor lift", -30.0, target, t_max);
     let (mut worst_speed, mut worst_law, mut worst_effort) = (0.0f64, 0.0f64, 0.0f64);
@@ -141,7 +144,7 @@ fn motor_lifts_a_load_below_its_max_torque_at_the_target_speed() {
 
 #[test]
 fn motor_stalls_at_its_max_torque_and_the_arm_falls_back_to_equilibrium() {
-    let mgr = 2.0 * G * 0.5;
+    let mgr = MGR;
     let t_max = mgr / 1.5;
     let mut a = arm("motor stall", 0.0, 1.0, t_max);
     let mut rates = Vec::new();

@@ -316,7 +316,10 @@ pub struct JointState {
     pub force_on_b_n: [f64; 3],
     /// Total torque of the joint on body b about its centre of mass, N·m.
     pub torque_on_b_n_m: [f64; 3],
-    /// Torque (N·m) or force (N) of its driver along its axis.
+    /// Its driver's effort: for motors, presses and velocity controllers the torque (N·m) or
+    /// force (N) on b along the driver's axis, positive when it drives b in the +axis direction
+    /// (a motor lifting a load reports the load's torque; a stalled one, its max torque); for a
+    /// spring its tension (N, damping included), positive when it pulls the two points together.
     pub driver_effort: f64,
     /// Its coordinate: angle (rad) or position (m), if it has one.
     pub coordinate: Option<f64>,
@@ -1440,6 +1443,16 @@ impl Simulation {
                     let axis =
                         (d.nodes[1].start_position_world(self) - d.nodes[0].start_position_world(self)).normalize();
                     Vector3::from(r.force_b_n).dot(&axis)
+                }
+                Primitive::Spring { .. } => {
+                    // Tension: the force on b along the line from b's point to a's.
+                    let line = d.nodes[0].start_position_world(self) - d.nodes[1].start_position_world(self);
+                    let f = Vector3::from(r.force_b_n);
+                    if line.norm() > 0.0 {
+                        f.dot(&line.normalize())
+                    } else {
+                        f.norm()
+                    }
                 }
                 _ => Vector3::from(r.force_b_n).norm(),
             };
