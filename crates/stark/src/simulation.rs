@@ -307,6 +307,9 @@ impl Simulation {
         let dir = self.settings.output.directory.clone();
         if self.settings.output.step_log {
             self.output.open_log(&dir, &self.settings.name)?;
+            if !self.bodies.is_empty() {
+                self.output.open_rigid_log(&dir, &self.settings.name)?;
+            }
         }
         if self.settings.output.frames && self.settings.output.fps > 0.0 && !self.output.meshes.is_empty() {
             self.output.write_frame(&dir, &self.settings.name, &self.nodes)?;
@@ -544,6 +547,10 @@ impl Simulation {
             s.max_active_pairs = s.max_active_pairs.max(c.active_pairs);
         }
         self.output.log(r)?;
+        if !self.bodies.is_empty() {
+            let record = crate::rigidbodies::RigidLogRecord::of(self);
+            self.output.log_rigid(&record)?;
+        }
         let fps = self.settings.output.fps;
         if self.settings.output.frames && fps > 0.0 && !self.output.meshes.is_empty() {
             let dir = self.settings.output.directory.clone();

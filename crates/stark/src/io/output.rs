@@ -47,6 +47,7 @@ pub struct Output {
     /// Time of the next frame, s.
     pub next_frame_time: f64,
     log: Option<std::io::BufWriter<std::fs::File>>,
+    rigid_log: Option<std::io::BufWriter<std::fs::File>>,
     scratch_x: Vec<Vector3<f64>>,
     scratch_v: Vec<Vector3<f64>>,
 }
@@ -117,10 +118,31 @@ impl Output {
         Ok(())
     }
 
-    /// Flush the step log.
+    /// Start the rigid-body log `<name>.rigid.jsonl` (truncates an existing one).
+    pub fn open_rigid_log(&mut self, directory: &Path, name: &str) -> Result<PathBuf> {
+        std::fs::create_dir_all(directory).map_err(|e| io_err(directory, e))?;
+        let path = directory.join(format!("{name}.rigid.jsonl"));
+        let file = std::fs::File::create(&path).map_err(|e| io_err(&path, e))?;
+        self.rigid_log = Some(std::io::BufWriter::new(file));
+        Ok(path)
+    }
+
+    /// Append one record to the rigid-body log (if open).
+    pub fn log_rigid<T: serde::Serialize>(&mut self, record: &T) -> Result<()> {
+        if let Some(log) = &mut self.rigid_log {
+            let line = serde_json::to_string(record).expect("serialisable record");
+            writeln!(log, "{line}").map_err(|e| io_err(Path::new("rigid log"), e))?;
+        }
+        Ok(())
+    }
+
+    /// Flush the logs.
     pub fn flush(&mut self) -> Result<()> {
         if let Some(log) = &mut self.log {
             log.flush().map_err(|e| io_err(Path::new("step log"), e))?;
+        }
+        if let Some(log) = &mut self.rigid_log {
+            log.flush().map_err(|e| io_err(Path::new("rigid log"), e))?;
         }
         Ok(())
     }

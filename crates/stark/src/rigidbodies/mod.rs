@@ -219,6 +219,35 @@ impl Simulation {
         Ok(RigidMeshHandle { body, nodes, contact })
     }
 
+    /// Give body `body` a mesh for the output frames only (no contact): its vertices (body frame)
+    /// become nodes that move with the body.
+    pub fn add_rigid_visual_mesh(
+        &mut self,
+        body: RigidBodyHandle,
+        local_vertices: &[Vector3<f64>],
+        triangles: &[[usize; 3]],
+    ) -> Result<NodeSetHandle> {
+        let b = self.check_body(body)?;
+        let label = self.rigid_bodies.labels[b].clone();
+        if let Some(t) = triangles.iter().find(|t| t.iter().any(|&i| i >= local_vertices.len())) {
+            return Err(StarkError::InvalidInput(format!(
+                "mesh of rigid body '{label}': triangle {t:?} refers to a missing vertex"
+            )));
+        }
+        let world: Vec<Vector3<f64>> = local_vertices
+            .iter()
+            .map(|p| self.bodies.position[b] + self.bodies.orientation[b] * p)
+            .collect();
+        let nodes = self.add_nodes(&format!("{label}.visual{}", self.deformables.sets.len()), &world)?;
+        for (k, i) in nodes.range().enumerate() {
+            self.nodes.body[i] = body.index;
+            self.nodes.rest[i] = local_vertices[k];
+        }
+        self.output
+            .add_mesh(&label, nodes, OutputCells::Triangles(triangles.to_vec()));
+        Ok(nodes)
+    }
+
     pub(crate) fn check_body(&self, body: RigidBodyHandle) -> Result<usize> {
         let i = body.i();
         if i < self.bodies.len() {
@@ -398,5 +427,100 @@ pub(crate) fn commit_bodies(bodies: &mut BodyArrays, v: &[Vector3<f64>], n_nodes
         bodies.orientation[b] = integrate_orientation(&bodies.orientation[b], &w, dt);
         bodies.velocity[b] = vel;
         bodies.angular_velocity[b] = w;
+    }
+}
+
+/// One line of the rigid-body log `<name>.rigid.jsonl`: every body's state and every joint's
+/// readout (primitives summed per joint label) at the end of an accepted step.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct RigidLogRecord {
+    /// Time, s.
+    pub time_s: f64,
+    /// Bodies, in creation order.
+    pub bodies: Vec<BodyLogEntry>,
+    /// Joints, by label, in creation order.
+    pub joints: Vec<JointLogEntry>,
+}
+
+/// A body's state in the rigid-body log.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct BodyLogEntry {
+    /// Label.
+    pub label: String,
+    /// Centre of mass, m.
+    pub position_m: [f64; 3],
+    /// Orientation quaternion `[w, x, y, z]`.
+    pub orientation: [f64; 4],
+    /// Linear velocity, m/s.
+    pub velocity_m_s: [f64; 3],
+    /// Angular velocity, rad/s.
+    pub angular_velocity_rad_s: [f64; 3],
+}
+
+/// A joint's readout in the rigid-body log.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct JointLogEntry {
+    /// Label.
+    pub label: String,
+    /// Largest violation of its length constraints, m.
+    pub violation_m: f64,
+    /// Largest violation of its angle constraints, rad.
+    pub violation_rad: f64,
+    /// Total force on body b (world), N.
+    pub force_on_b_n: [f64; 3],
+    /// Total torque on body b about its centre of mass, N·m.
+    pub torque_on_b_n_m: [f64; 3],
+}
+
+impl RigidLogRecord {
+    /// The record of `sim`'s current state.
+    pub fn of(sim: &Simulation) -> Self {
+        let b = &sim.bodies;
+        let bodies = (0..b.len())
+            .map(|i| {
+                let q = b.orientation[i];
+                BodyLogEntry {
+                    label: sim.rigid_bodies.labels[i].clone(),
+                    position_m: b.position[i].into(),
+                    orientation: [q.w, q.i, q.j, q.k],
+                    velocity_m_s: b.velocity[i].into(),
+                    angular_velocity_rad_s: b.angular_velocity[i].into(),
+                }
+            })
+            .collect();
+        let mut joints: Vec<JointLogEntry> = Vec::new();
+        for el in &sim.rigid_bodies.joints.potential.elements {
+            let idx = match joints.iter().position(|j| j.label == el.label) {
+                Some(k) => k,
+                None => {
+                    joints.push(JointLogEntry {
+                        label: el.label.clone(),
+                        violation_m: 0.0,
+                        violation_rad: 0.0,
+                        force_on_b_n: [0.0; 3],
+                        torque_on_b_n_m: [0.0; 3],
+                    });
+                    joints.len() - 1
+                }
+            };
+            let j = &mut joints[idx];
+            let r = &el.readout;
+            if el.primitive.is_hard() {
+                if el.primitive.is_angular() {
+                    j.violation_rad = j.violation_rad.max(r.violation);
+                } else {
+                    j.violation_m = j.violation_m.max(r.violation);
+                }
+            }
+            for k in 0..3 {
+                j.force_on_b_n[k] += r.force_b_n[k];
+                j.torque_on_b_n_m[k] += r.torque_b_n_m[k];
+            }
+        }
+        RigidLogRecord {
+            time_s: sim.time(),
+            bodies,
+            joints,
+        }
     }
 }
