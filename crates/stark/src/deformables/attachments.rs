@@ -193,30 +193,43 @@ impl<const N: usize> Potential<N> for AttachmentSet<N> {
         true
     }
     fn check_converged_step(&mut self, state: &EvalState) -> StepCheck {
-        let mut hardened = Vec::new();
-        for (g, range) in self.ranges.iter().enumerate() {
-            let tol = self.groups.params[g].tolerance_m;
-            if !tol.is_finite() {
-                continue;
-            }
-            let worst = range.clone().map(|e| self.gap(e, state.x)).fold(0.0, f64::max);
-            if worst > tol {
-                let p = &mut self.groups.params[g];
-                p.stiffness *= 2.0;
-                hardened.push(format!(
-                    "'{}' ({worst:.3e} m > {tol:.3e} m, k → {:.3e} N/m)",
-                    self.groups.labels[g], p.stiffness
-                ));
-            }
+        let gaps: Vec<f64> = (0..self.nodes.len()).map(|e| self.gap(e, state.x)).collect();
+        harden_out_of_tolerance(&mut self.groups, &self.ranges, |e| gaps[e], "attachments")
+    }
+}
+
+/// Double the stiffness of every attachment group whose largest gap (`gap` of its elements)
+/// exceeds its tolerance, and ask for a retry if any did (shared by the deformable and the
+/// deformable–rigid attachments).
+pub(crate) fn harden_out_of_tolerance(
+    groups: &mut Groups<AttachmentParams>,
+    ranges: &[std::ops::Range<usize>],
+    gap: impl Fn(usize) -> f64,
+    what: &str,
+) -> StepCheck {
+    let mut hardened = Vec::new();
+    for (g, range) in ranges.iter().enumerate() {
+        let tol = groups.params[g].tolerance_m;
+        if !tol.is_finite() {
+            continue;
         }
-        if hardened.is_empty() {
-            StepCheck::Accept
-        } else {
-            StepCheck::Retry(format!(
-                "attachments out of tolerance, stiffness doubled: {}",
-                hardened.join(", ")
-            ))
+        let worst = range.clone().map(&gap).fold(0.0, f64::max);
+        if worst > tol {
+            let p = &mut groups.params[g];
+            p.stiffness *= 2.0;
+            hardened.push(format!(
+                "'{}' ({worst:.3e} m > {tol:.3e} m, k → {:.3e} N/m)",
+                groups.labels[g], p.stiffness
+            ));
         }
+    }
+    if hardened.is_empty() {
+        StepCheck::Accept
+    } else {
+        StepCheck::Retry(format!(
+            "{what} out of tolerance, stiffness doubled: {}",
+            hardened.join(", ")
+        ))
     }
 }
 

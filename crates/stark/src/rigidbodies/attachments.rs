@@ -2,6 +2,7 @@
 //! `½k‖x_node − (t + R·p)‖²`, hardened (stiffness ×2, step retried) while a gap exceeds the
 //! tolerance, like the deformable attachments (stark-features §2.4).
 
+use crate::deformables::attachments::harden_out_of_tolerance;
 use crate::deformables::{AttachmentParams, Groups, NodeSetHandle};
 use crate::energy::potential::{Potential, Stencil};
 use crate::energy::term::StepCheck;
@@ -63,30 +64,17 @@ impl Potential<2> for RigidAttachmentSet {
         self.version
     }
     fn check_converged_step(&mut self, state: &EvalState) -> StepCheck {
-        let mut hardened = Vec::new();
-        for (g, range) in self.ranges.iter().enumerate() {
-            let tol = self.groups.params[g].tolerance_m;
-            if !tol.is_finite() {
-                continue;
-            }
-            let worst = range.clone().map(|e| self.gap(e, state)).fold(0.0, f64::max);
-            if worst > tol {
-                let p = &mut self.groups.params[g];
-                p.stiffness *= 2.0;
-                hardened.push(format!(
-                    "'{}' ({worst:.3e} m > {tol:.3e} m, k → {:.3e} N/m)",
-                    self.groups.labels[g], p.stiffness
-                ));
-            }
-        }
-        if hardened.is_empty() {
-            StepCheck::Accept
-        } else {
-            StepCheck::Retry(format!(
-                "rigid attachments out of tolerance, stiffness doubled: {}",
-                hardened.join(", ")
-            ))
-        }
+        let Self {
+            groups,
+            ranges,
+            elements,
+            ..
+        } = self;
+        let gap = |e: usize| {
+            let [a, b] = elements[e];
+            (a.position(state) - b.position(state)).norm()
+        };
+        harden_out_of_tolerance(groups, ranges, gap, "rigid attachments")
     }
 }
 
