@@ -17,7 +17,7 @@ use crate::energy::term::{element_stride, NO_DOF};
 use crate::energy::Node;
 use crate::energy::{EnergyTerm, EvalMode, HyperDual, Scalar, StepCheck, Vec3};
 use crate::error::{check_param, Result, StarkError};
-use crate::geometry::aabb::{edge_swept_aabb, point_swept_aabb, triangle_swept_aabb, Aabb};
+use crate::geometry::aabb::{edge_aabb, edge_swept_aabb, point_swept_aabb, triangle_aabb, triangle_swept_aabb, Aabb};
 use crate::geometry::bvh::Bvh;
 use crate::geometry::ccd::{edge_edge_max_step, point_triangle_max_step, CcdParams};
 use crate::geometry::distance::{
@@ -25,7 +25,7 @@ use crate::geometry::distance::{
     point_edge_closest_parameter_typed, point_triangle_closest_barycentric_typed, point_triangle_distance_sq_typed,
     point_triangle_distance_type, EdgeEdgeDistanceType as Ee, PointEdgeDistanceType, PointTriangleDistanceType as Pt,
 };
-use crate::geometry::intersection::find_edge_triangle_intersections;
+use crate::geometry::intersection::{edge_triangle_intersect, find_edge_triangle_intersections};
 use crate::state::{EvalState, NO_BODY};
 use barrier::barrier;
 use friction::FrictionElement;
@@ -151,6 +151,13 @@ pub struct ContactStats {
     pub min_ccd_fraction: f64,
     /// Candidate pairs that needed the exact CCD in the last line search.
     pub ccd_queries: usize,
+    /// Trial states tested for edge–triangle intersections in the last step (only when a contact
+    /// object is a rigid body's mesh: see [`Contact::rigid_pairs_intersect`]).
+    pub validity_checks: usize,
+    /// Trial states of the last step rejected because an edge crossed a triangle.
+    pub invalid_trials: usize,
+    /// Wall time of those tests in the last step, s.
+    pub validity_time_s: f64,
 }
 
 /// All contact objects and their interactions, as one solver term.
@@ -179,6 +186,12 @@ pub struct Contact {
     /// Candidates of the last line-search segment (set by `max_step_fraction`, which takes
     /// `&self`).
     candidate_cache: std::sync::Mutex<Option<Candidates>>,
+    /// Primitives of rigid bodies' meshes and of the other objects (set in `before_step`), for
+    /// the intersection test of trial states.
+    rigid_split: RigidSplit,
+    /// Intersection tests, rejections and their wall time in the current step
+    /// (`is_valid_state` takes `&self`).
+    validity_record: std::sync::Mutex<(usize, usize, f64)>,
     version: u64,
     relag_pending: bool,
     lag_solves: usize,
@@ -206,6 +219,8 @@ impl Default for Contact {
             kappa_initial: 0.0,
             ccd_record: std::sync::Mutex::new((1.0, 0)),
             candidate_cache: std::sync::Mutex::new(None),
+            rigid_split: RigidSplit::default(),
+            validity_record: std::sync::Mutex::new((0, 0, 0.0)),
             version: 0,
             relag_pending: false,
             lag_solves: 0,
@@ -215,6 +230,23 @@ impl Default for Contact {
                 ..Default::default()
             },
         }
+    }
+}
+
+/// The contact primitives split by whether they belong to a rigid body's collision mesh.
+#[derive(Default)]
+struct RigidSplit {
+    /// Triangles of rigid objects.
+    rigid_triangles: Vec<u32>,
+    /// Edges of rigid objects.
+    rigid_edges: Vec<u32>,
+    /// Triangles of the other objects.
+    other_triangles: Vec<u32>,
+}
+
+impl RigidSplit {
+    fn is_empty(&self) -> bool {
+        self.rigid_triangles.is_empty() && self.rigid_edges.is_empty()
     }
 }
 
@@ -862,6 +894,90 @@ impl Contact {
                 .iter()
                 .any(|o| state.nodes.body[o.nodes.first as usize] != NO_BODY)
     }
+
+    /// Split the primitives into those of rigid bodies' meshes and the others (empty without
+    /// rigid contact objects, which makes the validity test free).
+    fn split_rigid(&self, state: &EvalState) -> RigidSplit {
+        if !self.has_rigid_objects(state) {
+            return RigidSplit::default();
+        }
+        let rigid: Vec<bool> = self
+            .objects
+            .iter()
+            .map(|o| state.nodes.body[o.nodes.first as usize] != NO_BODY)
+            .collect();
+        let (rigid_triangles, other_triangles) =
+            (0..self.triangles.len() as u32).partition(|&t| rigid[self.tri_obj[t as usize] as usize]);
+        RigidSplit {
+            rigid_triangles,
+            rigid_edges: (0..self.edges.len() as u32)
+                .filter(|&e| rigid[self.edge_obj[e as usize] as usize])
+                .collect(),
+            other_triangles,
+        }
+    }
+
+    /// Whether, at positions `x`, an edge crosses a triangle (exact test,
+    /// [`edge_triangle_intersect`]) in a pair of enabled objects of which at least one is a rigid
+    /// body's mesh; pairs of deformable primitives are not tested. This is the line-search
+    /// validity test: deformable nodes move on straight lines in a line search, so CCD on the
+    /// chord guards them exactly, but a rigid point moves on an arc (its position is non-linear in
+    /// `ω`) and the trial state can leave the chord that CCD checked. Uses the split of the last
+    /// `before_step`.
+    ///
+    /// Cost: a BVH over the rigid triangles and one over the rigid edges, queried with the box of
+    /// every edge and of every other triangle that overlaps the rigid primitives' overall box.
+    pub fn rigid_pairs_intersect(&self, x: &[Vector3<f64>]) -> bool {
+        let split = &self.rigid_split;
+        if split.is_empty() {
+            return false;
+        }
+        let p = |i: u32| &x[i as usize];
+        let tri_box = |t: u32| {
+            let t = self.triangles[t as usize];
+            triangle_aabb(p(t[0]), p(t[1]), p(t[2]), 0.0)
+        };
+        let edge_box = |e: u32| {
+            let e = self.edges[e as usize];
+            edge_aabb(p(e[0]), p(e[1]), 0.0)
+        };
+        let crosses = |e: u32, t: u32| {
+            let (ea, tb) = (self.edges[e as usize], self.triangles[t as usize]);
+            self.pair_ok(self.edge_obj[e as usize], self.tri_obj[t as usize])
+                && !tb.contains(&ea[0])
+                && !tb.contains(&ea[1])
+                && edge_triangle_intersect(p(ea[0]), p(ea[1]), p(tb[0]), p(tb[1]), p(tb[2]))
+        };
+        // Every edge against the rigid triangles.
+        let boxes: Vec<Aabb> = split.rigid_triangles.par_iter().map(|&t| tri_box(t)).collect();
+        let bvh = Bvh::build(&boxes);
+        let all = bvh.aabb();
+        let hit = (0..self.edges.len() as u32).into_par_iter().any(|e| {
+            let b = edge_box(e);
+            if !b.intersects(&all) {
+                return false;
+            }
+            let mut hit = false;
+            bvh.query_aabb(&b, |k| hit = hit || crosses(e, split.rigid_triangles[k]));
+            hit
+        });
+        if hit {
+            return true;
+        }
+        // The other triangles against the rigid edges.
+        let boxes: Vec<Aabb> = split.rigid_edges.par_iter().map(|&e| edge_box(e)).collect();
+        let bvh = Bvh::build(&boxes);
+        let all = bvh.aabb();
+        split.other_triangles.par_iter().any(|&t| {
+            let b = tri_box(t);
+            if !b.intersects(&all) {
+                return false;
+            }
+            let mut hit = false;
+            bvh.query_aabb(&b, |k| hit = hit || crosses(split.rigid_edges[k], t));
+            hit
+        })
+    }
 }
 
 impl EnergyTerm for Contact {
@@ -953,6 +1069,8 @@ impl EnergyTerm for Contact {
     fn before_step(&mut self, state: &EvalState) {
         // Objects, thicknesses or enabled pairs may have changed since the last step.
         *self.candidate_cache.get_mut().expect("no poisoned lock") = None;
+        self.rigid_split = self.split_rigid(state);
+        *self.validity_record.get_mut().expect("no poisoned lock") = (0, 0, 0.0);
         if self.relag_pending {
             self.relag_pending = false;
         } else {
@@ -989,6 +1107,18 @@ impl EnergyTerm for Contact {
         *self.ccd_record.lock().expect("no poisoned lock") = (alpha, queries);
         alpha
     }
+    fn is_valid_state(&self, state: &EvalState) -> bool {
+        if self.rigid_split.is_empty() {
+            return true;
+        }
+        let t0 = std::time::Instant::now();
+        let valid = !self.rigid_pairs_intersect(state.x);
+        let mut r = self.validity_record.lock().expect("no poisoned lock");
+        r.0 += 1;
+        r.1 += usize::from(!valid);
+        r.2 += t0.elapsed().as_secs_f64();
+        valid
+    }
     fn check_converged_step(&mut self, state: &EvalState) -> StepCheck {
         if self.lag_solves < self.settings.friction_iterations && self.friction.iter().any(|&m| m > 0.0) {
             let pairs = self.detect(state.x);
@@ -1024,5 +1154,9 @@ impl EnergyTerm for Contact {
         let (fraction, queries) = *self.ccd_record.lock().expect("no poisoned lock");
         self.stats.min_ccd_fraction = fraction;
         self.stats.ccd_queries = queries;
+        let (checks, rejected, seconds) = *self.validity_record.lock().expect("no poisoned lock");
+        self.stats.validity_checks = checks;
+        self.stats.invalid_trials = rejected;
+        self.stats.validity_time_s = seconds;
     }
 }

@@ -17,6 +17,9 @@ use nalgebra::Vector3;
 use serde::Serialize;
 use std::time::Instant;
 
+/// Halvings of the initial guess before it falls back to rest (`v = 0`, always valid).
+const MAX_GUESS_HALVINGS: usize = 30;
+
 /// Which criterion ended a Newton solve.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
@@ -196,7 +199,8 @@ pub fn solve(
     };
 
     // Initial guess: the previous velocity, as far along it as is valid from rest (v = 0 keeps
-    // every node at x0, which is always valid).
+    // every node at x0, which is always valid). CCD checks the chord from x0; rigid points move
+    // on arcs, so the guess is also halved until the terms accept it (`is_valid_state`).
     v.clear();
     v.resize(n, Vector3::zeros());
     problem.place(v, &mut ws.x, &mut ws.poses);
@@ -206,10 +210,26 @@ pub fn solve(
         let t0 = Instant::now();
         let from = problem.state(v, &ws.x, &ws.poses);
         let to = problem.state(&ws.trial_v, &ws.trial_x, &ws.trial_poses);
-        let alpha = max_step(terms, &from, &to);
-        for (vi, v0) in v.iter_mut().zip(&ws.trial_v) {
-            *vi = v0 * alpha;
+        let mut alpha = max_step(terms, &from, &to);
+        let start = std::mem::take(&mut ws.trial_v);
+        for halving in 0..=MAX_GUESS_HALVINGS {
+            if halving == MAX_GUESS_HALVINGS {
+                alpha = 0.0;
+            }
+            for (vi, v0) in v.iter_mut().zip(&start) {
+                *vi = v0 * alpha;
+            }
+            if alpha == 0.0 {
+                break;
+            }
+            problem.place(v, &mut ws.trial_x, &mut ws.trial_poses);
+            let guess = problem.state(v, &ws.trial_x, &ws.trial_poses);
+            if terms.iter().all(|t| t.is_valid_state(&guess)) {
+                break;
+            }
+            alpha *= 0.5;
         }
+        ws.trial_v = start;
         report.times.ccd_s += t0.elapsed().as_secs_f64();
     }
 
@@ -323,17 +343,17 @@ pub fn solve(
             problem.place(&ws.trial_v, &mut ws.trial_x, &mut ws.trial_poses);
             {
                 let trial = problem.state(&ws.trial_v, &ws.trial_x, &ws.trial_poses);
+                if !terms.iter().all(|t| t.is_valid_state(&trial)) {
+                    // A rigid point left its chord and crossed a surface (see `is_valid_state`).
+                    report.line_search_evaluations += 1;
+                    alpha *= 0.5;
+                    continue;
+                }
                 for t in terms.iter_mut() {
                     t.prepare_evaluation(&trial);
                 }
             }
             let trial = problem.state(&ws.trial_v, &ws.trial_x, &ws.trial_poses);
-            if !terms.iter().all(|t| t.is_valid_state(&trial)) {
-                // A rigid point left its chord and crossed a surface (see `is_valid_state`).
-                report.line_search_evaluations += 1;
-                alpha *= 0.5;
-                continue;
-            }
             let e = total_energy(terms, &trial);
             report.line_search_evaluations += 1;
             if e.is_finite() && e <= energy + settings.armijo * alpha * descent + noise {
