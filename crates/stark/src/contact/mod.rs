@@ -12,7 +12,7 @@ pub mod pairs;
 pub use barrier::BarrierKind;
 
 use crate::deformables::NodeSetHandle;
-use crate::energy::kinematics::{element_blocks, map_element, NodeMap};
+use crate::energy::kinematics::{element_blocks, map_element_with, DofProjection, NodeMap};
 use crate::energy::term::{element_stride, NO_DOF};
 use crate::energy::Node;
 use crate::energy::{EnergyTerm, EvalMode, HyperDual, Scalar, StepCheck, Vec3};
@@ -948,37 +948,49 @@ impl Contact {
                 && !tb.contains(&ea[1])
                 && edge_triangle_intersect(p(ea[0]), p(ea[1]), p(tb[0]), p(tb[1]), p(tb[2]))
         };
-        // Every edge against the rigid triangles.
-        let boxes: Vec<Aabb> = split.rigid_triangles.par_iter().map(|&t| tri_box(t)).collect();
+        // Every edge against the rigid triangles, then the other triangles against the rigid
+        // edges. Small sets run sequentially (rayon's start-up costs more than the test).
+        let boxes: Vec<Aabb> = split.rigid_triangles.iter().map(|&t| tri_box(t)).collect();
         let bvh = Bvh::build(&boxes);
-        let all = bvh.aabb();
-        let hit = (0..self.edges.len() as u32).into_par_iter().any(|e| {
+        let near = bvh.aabb();
+        let edge_hits = |e: u32| {
             let b = edge_box(e);
-            if !b.intersects(&all) {
-                return false;
-            }
             let mut hit = false;
-            bvh.query_aabb(&b, |k| hit = hit || crosses(e, split.rigid_triangles[k]));
+            if b.intersects(&near) {
+                bvh.query_aabb(&b, |k| hit = hit || crosses(e, split.rigid_triangles[k]));
+            }
             hit
-        });
+        };
+        let n_edges = self.edges.len() as u32;
+        let hit = if n_edges < PARALLEL_VALIDITY_MIN {
+            (0..n_edges).any(edge_hits)
+        } else {
+            (0..n_edges).into_par_iter().any(edge_hits)
+        };
         if hit {
             return true;
         }
-        // The other triangles against the rigid edges.
-        let boxes: Vec<Aabb> = split.rigid_edges.par_iter().map(|&e| edge_box(e)).collect();
+        let boxes: Vec<Aabb> = split.rigid_edges.iter().map(|&e| edge_box(e)).collect();
         let bvh = Bvh::build(&boxes);
-        let all = bvh.aabb();
-        split.other_triangles.par_iter().any(|&t| {
+        let near = bvh.aabb();
+        let triangle_hits = |&t: &u32| {
             let b = tri_box(t);
-            if !b.intersects(&all) {
-                return false;
-            }
             let mut hit = false;
-            bvh.query_aabb(&b, |k| hit = hit || crosses(split.rigid_edges[k], t));
+            if b.intersects(&near) {
+                bvh.query_aabb(&b, |k| hit = hit || crosses(split.rigid_edges[k], t));
+            }
             hit
-        })
+        };
+        if split.other_triangles.len() < PARALLEL_VALIDITY_MIN as usize {
+            split.other_triangles.iter().any(triangle_hits)
+        } else {
+            split.other_triangles.par_iter().any(triangle_hits)
+        }
     }
 }
+
+/// Primitive counts below which the validity test runs on one thread.
+const PARALLEL_VALIDITY_MIN: u32 = 4096;
 
 impl EnergyTerm for Contact {
     fn name(&self) -> &str {
@@ -1061,9 +1073,14 @@ impl EnergyTerm for Contact {
                 self.friction_elements[e - self.pairs.len()].nodes
             };
             // Through the kinematic map; the position-space Hessian is already positive
-            // semi-definite, the rotation's second-order term may not be.
-            let project = self.settings.hessian != PairHessian::Exact;
-            map_element(&node_maps(&nodes, state), &d, state.dt, 5, project, out);
+            // semi-definite (projected or Gauss–Newton barrier, friction), the rotation's
+            // second-order term may not be: only that is projected.
+            let projection = if self.settings.hessian == PairHessian::Exact {
+                DofProjection::None
+            } else {
+                DofProjection::RotationTermOnly
+            };
+            map_element_with(&node_maps(&nodes, state), &d, state.dt, 5, projection, out);
         }
     }
     fn before_step(&mut self, state: &EvalState) {
@@ -1158,5 +1175,108 @@ impl EnergyTerm for Contact {
         self.stats.validity_checks = checks;
         self.stats.invalid_trials = rejected;
         self.stats.validity_time_s = seconds;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::energy::kinematics::BodyPose;
+    use crate::energy::EnergyTerm;
+    use crate::state::{dof_blocks, EvalState};
+    use crate::{Settings, Simulation};
+    use nalgebra::{UnitQuaternion, Vector3};
+
+    fn square(z: f64, half: f64) -> [Vector3<f64>; 4] {
+        [
+            Vector3::new(-half, -half, z),
+            Vector3::new(half, -half, z),
+            Vector3::new(half, half, z),
+            Vector3::new(-half, half, z),
+        ]
+    }
+
+    /// Run the contact term's `before_step` at the current state and return the validity of the
+    /// positions `x` through `is_valid_state`.
+    fn valid_at(sim: &mut Simulation, x: &[Vector3<f64>]) -> bool {
+        let zeros = vec![Vector3::zeros(); dof_blocks(&sim.nodes, &sim.bodies)];
+        let poses: Vec<BodyPose> = (0..sim.bodies.len())
+            .map(|b| BodyPose::at_rest(sim.bodies.position[b], &sim.bodies.orientation[b], 0.01))
+            .collect();
+        let nodes = sim.nodes.clone();
+        let state = EvalState {
+            dt: 0.01,
+            time: 0.01,
+            gravity: Vector3::zeros(),
+            nodes: &nodes,
+            v: &zeros,
+            x: &nodes.x,
+            bodies: &sim.bodies,
+            poses: &poses,
+        };
+        sim.contact.before_step(&state);
+        let trial = EvalState { x, ..state };
+        sim.contact.is_valid_state(&trial)
+    }
+
+    #[test]
+    fn trial_states_with_rigid_crossings_are_invalid() {
+        let mut settings = Settings::default();
+        settings.contact.default_thickness_m = Some(1e-3);
+        let mut sim = Simulation::new(settings).unwrap();
+        // A 2 m sheet whose diagonal runs from (−1, −1) to (1, 1), and two 0.1 m boxes above
+        // it, far from the diagonal and the border.
+        let sheet = sim
+            .add_prescribed_surface("sheet", &square(0.0, 1.0), &[[0, 1, 2], [0, 2, 3]], 1e-3, 1e4)
+            .unwrap();
+        let (q, size) = (UnitQuaternion::identity(), Vector3::repeat(0.1));
+        let a = sim
+            .add_box("a", 1.0, size, Vector3::new(0.5, -0.5, 0.1), q, None)
+            .unwrap();
+        let b = sim
+            .add_box("b", 1.0, size, Vector3::new(-0.5, 0.5, 0.1), q, None)
+            .unwrap();
+        let x = sim.nodes.x.clone();
+        assert!(valid_at(&mut sim, &x));
+        // Box a straddles the sheet: only its vertical edges cross a sheet triangle.
+        let mut down = x.clone();
+        for i in a.mesh.nodes.range() {
+            down[i].z -= 0.1;
+        }
+        assert!(!valid_at(&mut sim, &down));
+        // Box a overlaps box b (rigid–rigid).
+        let mut over = x.clone();
+        for i in a.mesh.nodes.range() {
+            over[i] += Vector3::new(-0.95, 0.95, 0.03);
+        }
+        assert!(!valid_at(&mut sim, &over));
+        // Box a centred on the sheet's diagonal: the diagonal crosses its faces.
+        let mut moved = x.clone();
+        for i in a.mesh.nodes.range() {
+            moved[i] += Vector3::new(-0.5, -0.5, -0.1);
+        }
+        assert!(!valid_at(&mut sim, &moved));
+        // Pairs whose collisions are off are not tested.
+        sim.contact.disable_collision(sheet.contact, a.mesh.contact).unwrap();
+        assert!(valid_at(&mut sim, &down));
+        let _ = b;
+    }
+
+    #[test]
+    fn deformable_crossings_are_left_to_ccd_and_scenes_without_bodies_pay_nothing() {
+        let mut settings = Settings::default();
+        settings.contact.default_thickness_m = Some(1e-3);
+        let mut sim = Simulation::new(settings).unwrap();
+        sim.add_prescribed_surface("lower", &square(0.0, 1.0), &[[0, 1, 2], [0, 2, 3]], 1e-3, 1e4)
+            .unwrap();
+        sim.add_prescribed_surface("upper", &square(0.5, 0.5), &[[0, 1, 2], [0, 2, 3]], 1e-3, 1e4)
+            .unwrap();
+        let mut x = sim.nodes.x.clone();
+        // The upper sheet tilted through the lower one.
+        x[4].z = -0.5;
+        x[5].z = -0.5;
+        assert!(!sim.contact.find_intersections(&x).is_empty());
+        assert!(valid_at(&mut sim, &x), "deformable pairs are CCD's business");
+        assert!(sim.contact.rigid_split.is_empty());
+        assert_eq!(sim.contact.validity_record.lock().unwrap().0, 0, "no test ran");
     }
 }

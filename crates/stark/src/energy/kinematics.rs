@@ -169,6 +169,22 @@ pub fn count_blocks(maps: &[NodeMap]) -> usize {
     element_blocks(maps, &mut buf[..(2 * maps.len()).min(16)])
 }
 
+/// How [`map_element_with`] makes an element's DOF Hessian positive semi-definite.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DofProjection {
+    /// None: the exact DOF Hessian.
+    None,
+    /// Project the whole DOF Hessian (including the second-order rigid terms): one
+    /// eigendecomposition of up to `3·width` rows per element.
+    Full,
+    /// The position-space Hessian is already positive semi-definite (a projected or Gauss–Newton
+    /// barrier, friction): then `JᵀHJ` is too, and only the second-order rotation term of each
+    /// body (`Σ gᵢ ∂²xᵢ/∂ω²`, one 3×3 block on the body's angular block) is projected before it
+    /// is added. The sum is positive semi-definite and costs a 3×3 eigendecomposition per body
+    /// instead of a 15×15 one per element; elements without rigid nodes need none.
+    RotationTermOnly,
+}
+
 /// Map position-space derivatives of an element (value, gradient and full Hessian of `d`) to its
 /// DOF blocks (see [`element_blocks`]), writing the solver layout of
 /// [`element_stride`](super::term::element_stride)`(width)` into `out`. With `project`, the DOF
@@ -179,6 +195,23 @@ pub fn map_element<const N: usize>(
     dt: f64,
     width: usize,
     project: bool,
+    out: &mut [f64],
+) {
+    let projection = if project {
+        DofProjection::Full
+    } else {
+        DofProjection::None
+    };
+    map_element_with(maps, d, dt, width, projection, out);
+}
+
+/// [`map_element`] with a choice of [`DofProjection`].
+pub fn map_element_with<const N: usize>(
+    maps: &[NodeMap; N],
+    d: &HyperDual<N>,
+    dt: f64,
+    width: usize,
+    projection: DofProjection,
     out: &mut [f64],
 ) {
     let mut blocks = [NO_DOF; 16];
@@ -196,6 +229,7 @@ pub fn map_element<const N: usize>(
     let n = 3 * m;
     let mut g = [0.0; 48];
     let mut h = [0.0; 48 * 48];
+    let mut rotation_terms = [[0.0; 9]; 16];
     for a in 0..N {
         let ga = Vector3::from(d.grad[a]);
         for &(s, j) in &jac[a] {
@@ -227,18 +261,40 @@ pub fn map_element<const N: usize>(
                 }
             }
         }
-        // Second-order term of the rotation: Σᵢ gᵢ ∂²xᵢ/∂ω_k∂ω_l.
+        // Second-order term of the rotation: Σᵢ gᵢ ∂²xᵢ/∂ω_k∂ω_l (collected per angular slot
+        // when it is projected on its own).
         if let NodeMap::Rigid { ang, local, pose, .. } = maps[a] {
             let s = slot(ang);
             for k in 0..3 {
                 for l in 0..3 {
-                    h[(3 * s + k) * n + 3 * s + l] += ga.dot(&(pose.d2r[k][l] * local));
+                    let t = ga.dot(&(pose.d2r[k][l] * local));
+                    if projection == DofProjection::RotationTermOnly {
+                        rotation_terms[s][3 * k + l] += t;
+                    } else {
+                        h[(3 * s + k) * n + 3 * s + l] += t;
+                    }
                 }
             }
         }
     }
-    if project {
-        project_psd(&mut h[..n * n], n);
+    match projection {
+        DofProjection::None => {}
+        DofProjection::Full => {
+            project_psd(&mut h[..n * n], n);
+        }
+        DofProjection::RotationTermOnly => {
+            for (s, t) in rotation_terms.iter_mut().enumerate().take(m) {
+                if t.iter().all(|&x| x == 0.0) {
+                    continue;
+                }
+                project_psd(t, 3);
+                for k in 0..3 {
+                    for l in 0..3 {
+                        h[(3 * s + k) * n + 3 * s + l] += t[3 * k + l];
+                    }
+                }
+            }
+        }
     }
     out.iter_mut().for_each(|o| *o = 0.0);
     out[0] = d.value;
@@ -401,5 +457,61 @@ mod tests {
                 );
             }
         }
+    }
+
+    #[test]
+    fn rotation_term_projection_is_psd_and_keeps_the_gradient() {
+        // A barrier-like element: a rigid point pushed along +z by a deformable node (gradient
+        // along −z, position Hessian c·n nᵀ, positive semi-definite), far from the centre of
+        // mass so that the second-order rotation term is large and indefinite.
+        let dt = 0.05;
+        let q0 = UnitQuaternion::from_euler_angles(0.3, -0.7, 1.1);
+        let pose = BodyPose::new(
+            Vector3::new(0.0, 0.0, 1.0),
+            &q0,
+            &Vector3::zeros(),
+            &Vector3::new(1.0, -2.0, 0.5),
+            dt,
+        );
+        let mut d = HyperDual::<2>::constant(0.3);
+        d.grad[0] = [0.0, 0.0, -50.0];
+        d.grad[1] = [0.0, 0.0, 50.0];
+        for (a, b, s) in [(0, 0, 1.0), (1, 1, 1.0), (0, 1, -1.0), (1, 0, -1.0)] {
+            d.hess[a][2][b][2] = 2.0e3 * s;
+        }
+        let rigid = [
+            NodeMap::Rigid {
+                lin: 0,
+                ang: 1,
+                local: Vector3::new(0.4, -0.3, -0.5),
+                pose: &pose,
+            },
+            NodeMap::Free { block: 2 },
+        ];
+        let width = 3;
+        let stride = crate::energy::term::element_stride(width);
+        let (mut exact, mut split, mut full) = (vec![0.0; stride], vec![0.0; stride], vec![0.0; stride]);
+        map_element_with(&rigid, &d, dt, width, DofProjection::None, &mut exact);
+        map_element_with(&rigid, &d, dt, width, DofProjection::RotationTermOnly, &mut split);
+        map_element_with(&rigid, &d, dt, width, DofProjection::Full, &mut full);
+        assert_eq!(exact[..10], split[..10], "value and gradient");
+        let dense = |out: &[f64]| {
+            nalgebra::DMatrix::from_fn(9, 9, |i, j| {
+                out[1 + 3 * width + 9 * ((i / 3) * width + j / 3) + 3 * (i % 3) + j % 3]
+            })
+        };
+        let min_eig = |m: nalgebra::DMatrix<f64>| m.symmetric_eigenvalues().min();
+        assert!(
+            min_eig(dense(&exact)) < -1e-3,
+            "the test needs an indefinite rotation term"
+        );
+        assert!(min_eig(dense(&split)) > -1e-9 * dense(&split).norm());
+        assert!(min_eig(dense(&full)) > -1e-9 * dense(&full).norm());
+        // Without rigid nodes nothing is projected.
+        let free = [NodeMap::Free { block: 0 }, NodeMap::Free { block: 1 }];
+        let (mut a, mut b) = (vec![0.0; stride], vec![0.0; stride]);
+        map_element_with(&free, &d, dt, width, DofProjection::None, &mut a);
+        map_element_with(&free, &d, dt, width, DofProjection::RotationTermOnly, &mut b);
+        assert_eq!(a, b);
     }
 }
