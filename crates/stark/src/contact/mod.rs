@@ -456,6 +456,33 @@ impl Contact {
             .collect()
     }
 
+    /// The barrier (normal contact) force on every node at positions `x`, N: minus the gradient
+    /// of the barrier energy of the pairs active at `x` (current stiffness κ). Summed over the
+    /// mesh nodes of a rigid body it is the contact force on the body (its moment about the
+    /// centre of mass the contact torque); summed over an object, the load it carries. Friction
+    /// is not included.
+    pub fn barrier_forces(&mut self, x: &[Vector3<f64>]) -> Vec<Vector3<f64>> {
+        let mut forces = vec![Vector3::zeros(); x.len()];
+        let pairs = self.detect(x);
+        let mut d = HyperDual::<4>::constant(0.0);
+        for p in &pairs {
+            pair_derivatives(
+                p,
+                &Self::stencil_x(&p.nodes, x),
+                self.kappa * p.multiplicity,
+                self.settings.barrier,
+                PairHessian::GaussNewton,
+                &mut d,
+            );
+            for (k, &i) in p.nodes.iter().enumerate() {
+                if i != NO_DOF {
+                    forces[i as usize] -= Vector3::from(d.grad[k]);
+                }
+            }
+        }
+        forces
+    }
+
     /// Choose the initial barrier stiffness (if not set) from the node masses and dt.
     pub fn initialize_stiffness(&mut self, masses: &[f64], dt: f64) {
         if self.kappa > 0.0 {

@@ -13,5 +13,6 @@ pub mod rigid_body_conserves_angular_momentum;
 pub mod rigid_body_falls_like_backward_euler;
 pub mod rigid_body_spins_stably_about_major_and_minor_axes;
 pub mod rigid_box_incline_friction;
+pub mod rigid_box_rests_on_soft_block;
 pub mod rigid_box_stack_rests;
 pub mod stark_replicas_match_reference;
