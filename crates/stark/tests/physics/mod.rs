@@ -9,6 +9,7 @@ pub mod free_fall_matches_backward_euler;
 pub mod incline_friction;
 pub mod quasistatic_stretch_converges;
 pub mod results_are_deterministic;
+pub mod rigid_bodies_do_not_tunnel;
 pub mod rigid_body_conserves_angular_momentum;
 pub mod rigid_body_falls_like_backward_euler;
 pub mod rigid_body_spins_stably_about_major_and_minor_axes;
