@@ -17,7 +17,7 @@ use crate::energy::term::{element_stride, NO_DOF};
 use crate::energy::Node;
 use crate::energy::{EnergyTerm, EvalMode, HyperDual, Scalar, StepCheck, Vec3};
 use crate::error::{check_param, Result, StarkError};
-use crate::geometry::aabb::{edge_swept_aabb, point_swept_aabb, triangle_swept_aabb, Aabb};
+use crate::geometry::aabb::{edge_aabb, edge_swept_aabb, point_swept_aabb, triangle_aabb, triangle_swept_aabb, Aabb};
 use crate::geometry::bvh::Bvh;
 use crate::geometry::ccd::{edge_edge_max_step, point_triangle_max_step, CcdParams};
 use crate::geometry::distance::{
@@ -25,7 +25,7 @@ use crate::geometry::distance::{
     point_edge_closest_parameter_typed, point_triangle_closest_barycentric_typed, point_triangle_distance_sq_typed,
     point_triangle_distance_type, EdgeEdgeDistanceType as Ee, PointEdgeDistanceType, PointTriangleDistanceType as Pt,
 };
-use crate::geometry::intersection::find_edge_triangle_intersections;
+use crate::geometry::intersection::{edge_triangle_intersect, find_edge_triangle_intersections};
 use crate::state::{EvalState, NO_BODY};
 use barrier::barrier;
 use friction::FrictionElement;
@@ -151,6 +151,13 @@ pub struct ContactStats {
     pub min_ccd_fraction: f64,
     /// Candidate pairs that needed the exact CCD in the last line search.
     pub ccd_queries: usize,
+    /// Trial states tested for edge–triangle intersections in the last step (only when a contact
+    /// object is a rigid body's mesh: see [`Contact::rigid_pairs_intersect`]).
+    pub validity_checks: usize,
+    /// Trial states of the last step rejected because an edge crossed a triangle.
+    pub invalid_trials: usize,
+    /// Wall time of those tests in the last step, s.
+    pub validity_time_s: f64,
 }
 
 /// All contact objects and their interactions, as one solver term.
@@ -179,6 +186,12 @@ pub struct Contact {
     /// Candidates of the last line-search segment (set by `max_step_fraction`, which takes
     /// `&self`).
     candidate_cache: std::sync::Mutex<Option<Candidates>>,
+    /// Primitives of rigid bodies' meshes and of the other objects (set in `before_step`), for
+    /// the intersection test of trial states.
+    rigid_split: RigidSplit,
+    /// Intersection tests, rejections and their wall time in the current step
+    /// (`is_valid_state` takes `&self`).
+    validity_record: std::sync::Mutex<(usize, usize, f64)>,
     version: u64,
     relag_pending: bool,
     lag_solves: usize,
@@ -206,6 +219,8 @@ impl Default for Contact {
             kappa_initial: 0.0,
             ccd_record: std::sync::Mutex::new((1.0, 0)),
             candidate_cache: std::sync::Mutex::new(None),
+            rigid_split: RigidSplit::default(),
+            validity_record: std::sync::Mutex::new((0, 0, 0.0)),
             version: 0,
             relag_pending: false,
             lag_solves: 0,
@@ -215,6 +230,23 @@ impl Default for Contact {
                 ..Default::default()
             },
         }
+    }
+}
+
+/// The contact primitives split by whether they belong to a rigid body's collision mesh.
+#[derive(Default)]
+struct RigidSplit {
+    /// Triangles of rigid objects.
+    rigid_triangles: Vec<u32>,
+    /// Edges of rigid objects.
+    rigid_edges: Vec<u32>,
+    /// Triangles of the other objects.
+    other_triangles: Vec<u32>,
+}
+
+impl RigidSplit {
+    fn is_empty(&self) -> bool {
+        self.rigid_triangles.is_empty() && self.rigid_edges.is_empty()
     }
 }
 
@@ -422,6 +454,33 @@ impl Contact {
                 )
             })
             .collect()
+    }
+
+    /// The barrier (normal contact) force on every node at positions `x`, N: minus the gradient
+    /// of the barrier energy of the pairs active at `x` (current stiffness κ). Summed over the
+    /// mesh nodes of a rigid body it is the contact force on the body (its moment about the
+    /// centre of mass the contact torque); summed over an object, the load it carries. Friction
+    /// is not included.
+    pub fn barrier_forces(&mut self, x: &[Vector3<f64>]) -> Vec<Vector3<f64>> {
+        let mut forces = vec![Vector3::zeros(); x.len()];
+        let pairs = self.detect(x);
+        let mut d = HyperDual::<4>::constant(0.0);
+        for p in &pairs {
+            pair_derivatives(
+                p,
+                &Self::stencil_x(&p.nodes, x),
+                self.kappa * p.multiplicity,
+                self.settings.barrier,
+                PairHessian::GaussNewton,
+                &mut d,
+            );
+            for (k, &i) in p.nodes.iter().enumerate() {
+                if i != NO_DOF {
+                    forces[i as usize] -= Vector3::from(d.grad[k]);
+                }
+            }
+        }
+        forces
     }
 
     /// Choose the initial barrier stiffness (if not set) from the node masses and dt.
@@ -862,7 +921,103 @@ impl Contact {
                 .iter()
                 .any(|o| state.nodes.body[o.nodes.first as usize] != NO_BODY)
     }
+
+    /// Split the primitives into those of rigid bodies' meshes and the others (empty without
+    /// rigid contact objects, which makes the validity test free).
+    fn split_rigid(&self, state: &EvalState) -> RigidSplit {
+        if !self.has_rigid_objects(state) {
+            return RigidSplit::default();
+        }
+        let rigid: Vec<bool> = self
+            .objects
+            .iter()
+            .map(|o| state.nodes.body[o.nodes.first as usize] != NO_BODY)
+            .collect();
+        let (rigid_triangles, other_triangles) =
+            (0..self.triangles.len() as u32).partition(|&t| rigid[self.tri_obj[t as usize] as usize]);
+        RigidSplit {
+            rigid_triangles,
+            rigid_edges: (0..self.edges.len() as u32)
+                .filter(|&e| rigid[self.edge_obj[e as usize] as usize])
+                .collect(),
+            other_triangles,
+        }
+    }
+
+    /// Whether, at positions `x`, an edge crosses a triangle (exact test,
+    /// [`edge_triangle_intersect`]) in a pair of enabled objects of which at least one is a rigid
+    /// body's mesh; pairs of deformable primitives are not tested. This is the line-search
+    /// validity test: deformable nodes move on straight lines in a line search, so CCD on the
+    /// chord guards them exactly, but a rigid point moves on an arc (its position is non-linear in
+    /// `ω`) and the trial state can leave the chord that CCD checked. Uses the split of the last
+    /// `before_step`.
+    ///
+    /// Cost: a BVH over the rigid triangles and one over the rigid edges, queried with the box of
+    /// every edge and of every other triangle that overlaps the rigid primitives' overall box.
+    pub fn rigid_pairs_intersect(&self, x: &[Vector3<f64>]) -> bool {
+        let split = &self.rigid_split;
+        if split.is_empty() {
+            return false;
+        }
+        let p = |i: u32| &x[i as usize];
+        let tri_box = |t: u32| {
+            let t = self.triangles[t as usize];
+            triangle_aabb(p(t[0]), p(t[1]), p(t[2]), 0.0)
+        };
+        let edge_box = |e: u32| {
+            let e = self.edges[e as usize];
+            edge_aabb(p(e[0]), p(e[1]), 0.0)
+        };
+        let crosses = |e: u32, t: u32| {
+            let (ea, tb) = (self.edges[e as usize], self.triangles[t as usize]);
+            self.pair_ok(self.edge_obj[e as usize], self.tri_obj[t as usize])
+                && !tb.contains(&ea[0])
+                && !tb.contains(&ea[1])
+                && edge_triangle_intersect(p(ea[0]), p(ea[1]), p(tb[0]), p(tb[1]), p(tb[2]))
+        };
+        // Every edge against the rigid triangles, then the other triangles against the rigid
+        // edges. Small sets run sequentially (rayon's start-up costs more than the test).
+        let boxes: Vec<Aabb> = split.rigid_triangles.iter().map(|&t| tri_box(t)).collect();
+        let bvh = Bvh::build(&boxes);
+        let near = bvh.aabb();
+        let edge_hits = |e: u32| {
+            let b = edge_box(e);
+            let mut hit = false;
+            if b.intersects(&near) {
+                bvh.query_aabb(&b, |k| hit = hit || crosses(e, split.rigid_triangles[k]));
+            }
+            hit
+        };
+        let n_edges = self.edges.len() as u32;
+        let hit = if n_edges < PARALLEL_VALIDITY_MIN {
+            (0..n_edges).any(edge_hits)
+        } else {
+            (0..n_edges).into_par_iter().any(edge_hits)
+        };
+        if hit {
+            return true;
+        }
+        let boxes: Vec<Aabb> = split.rigid_edges.iter().map(|&e| edge_box(e)).collect();
+        let bvh = Bvh::build(&boxes);
+        let near = bvh.aabb();
+        let triangle_hits = |&t: &u32| {
+            let b = tri_box(t);
+            let mut hit = false;
+            if b.intersects(&near) {
+                bvh.query_aabb(&b, |k| hit = hit || crosses(split.rigid_edges[k], t));
+            }
+            hit
+        };
+        if split.other_triangles.len() < PARALLEL_VALIDITY_MIN as usize {
+            split.other_triangles.iter().any(triangle_hits)
+        } else {
+            split.other_triangles.par_iter().any(triangle_hits)
+        }
+    }
 }
+
+/// Primitive counts below which the validity test runs on one thread.
+const PARALLEL_VALIDITY_MIN: u32 = 4096;
 
 impl EnergyTerm for Contact {
     fn name(&self) -> &str {
@@ -957,6 +1112,8 @@ impl EnergyTerm for Contact {
     fn before_step(&mut self, state: &EvalState) {
         // Objects, thicknesses or enabled pairs may have changed since the last step.
         *self.candidate_cache.get_mut().expect("no poisoned lock") = None;
+        self.rigid_split = self.split_rigid(state);
+        *self.validity_record.get_mut().expect("no poisoned lock") = (0, 0, 0.0);
         if self.relag_pending {
             self.relag_pending = false;
         } else {
@@ -993,6 +1150,18 @@ impl EnergyTerm for Contact {
         *self.ccd_record.lock().expect("no poisoned lock") = (alpha, queries);
         alpha
     }
+    fn is_valid_state(&self, state: &EvalState) -> bool {
+        if self.rigid_split.is_empty() {
+            return true;
+        }
+        let t0 = std::time::Instant::now();
+        let valid = !self.rigid_pairs_intersect(state.x);
+        let mut r = self.validity_record.lock().expect("no poisoned lock");
+        r.0 += 1;
+        r.1 += usize::from(!valid);
+        r.2 += t0.elapsed().as_secs_f64();
+        valid
+    }
     fn check_converged_step(&mut self, state: &EvalState) -> StepCheck {
         if self.lag_solves < self.settings.friction_iterations && self.friction.iter().any(|&m| m > 0.0) {
             let pairs = self.detect(state.x);
@@ -1028,5 +1197,112 @@ impl EnergyTerm for Contact {
         let (fraction, queries) = *self.ccd_record.lock().expect("no poisoned lock");
         self.stats.min_ccd_fraction = fraction;
         self.stats.ccd_queries = queries;
+        let (checks, rejected, seconds) = *self.validity_record.lock().expect("no poisoned lock");
+        self.stats.validity_checks = checks;
+        self.stats.invalid_trials = rejected;
+        self.stats.validity_time_s = seconds;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::energy::kinematics::BodyPose;
+    use crate::energy::EnergyTerm;
+    use crate::state::{dof_blocks, EvalState};
+    use crate::{Settings, Simulation};
+    use nalgebra::{UnitQuaternion, Vector3};
+
+    fn square(z: f64, half: f64) -> [Vector3<f64>; 4] {
+        [
+            Vector3::new(-half, -half, z),
+            Vector3::new(half, -half, z),
+            Vector3::new(half, half, z),
+            Vector3::new(-half, half, z),
+        ]
+    }
+
+    /// Run the contact term's `before_step` at the current state and return the validity of the
+    /// positions `x` through `is_valid_state`.
+    fn valid_at(sim: &mut Simulation, x: &[Vector3<f64>]) -> bool {
+        let zeros = vec![Vector3::zeros(); dof_blocks(&sim.nodes, &sim.bodies)];
+        let poses: Vec<BodyPose> = (0..sim.bodies.len())
+            .map(|b| BodyPose::at_rest(sim.bodies.position[b], &sim.bodies.orientation[b], 0.01))
+            .collect();
+        let nodes = sim.nodes.clone();
+        let state = EvalState {
+            dt: 0.01,
+            time: 0.01,
+            gravity: Vector3::zeros(),
+            nodes: &nodes,
+            v: &zeros,
+            x: &nodes.x,
+            bodies: &sim.bodies,
+            poses: &poses,
+        };
+        sim.contact.before_step(&state);
+        let trial = EvalState { x, ..state };
+        sim.contact.is_valid_state(&trial)
+    }
+
+    #[test]
+    fn trial_states_with_rigid_crossings_are_invalid() {
+        let mut settings = Settings::default();
+        settings.contact.default_thickness_m = Some(1e-3);
+        let mut sim = Simulation::new(settings).unwrap();
+        // A 2 m sheet whose diagonal runs from (−1, −1) to (1, 1), and two 0.1 m boxes above
+        // it, far from the diagonal and the border.
+        let sheet = sim
+            .add_prescribed_surface("sheet", &square(0.0, 1.0), &[[0, 1, 2], [0, 2, 3]], 1e-3, 1e4)
+            .unwrap();
+        let (q, size) = (UnitQuaternion::identity(), Vector3::repeat(0.1));
+        let a = sim
+            .add_box("a", 1.0, size, Vector3::new(0.5, -0.5, 0.1), q, None)
+            .unwrap();
+        let b = sim
+            .add_box("b", 1.0, size, Vector3::new(-0.5, 0.5, 0.1), q, None)
+            .unwrap();
+        let x = sim.nodes.x.clone();
+        assert!(valid_at(&mut sim, &x));
+        // Box a straddles the sheet: only its vertical edges cross a sheet triangle.
+        let mut down = x.clone();
+        for i in a.mesh.nodes.range() {
+            down[i].z -= 0.1;
+        }
+        assert!(!valid_at(&mut sim, &down));
+        // Box a overlaps box b (rigid–rigid).
+        let mut over = x.clone();
+        for i in a.mesh.nodes.range() {
+            over[i] += Vector3::new(-0.95, 0.95, 0.03);
+        }
+        assert!(!valid_at(&mut sim, &over));
+        // Box a centred on the sheet's diagonal: the diagonal crosses its faces.
+        let mut moved = x.clone();
+        for i in a.mesh.nodes.range() {
+            moved[i] += Vector3::new(-0.5, -0.5, -0.1);
+        }
+        assert!(!valid_at(&mut sim, &moved));
+        // Pairs whose collisions are off are not tested.
+        sim.contact.disable_collision(sheet.contact, a.mesh.contact).unwrap();
+        assert!(valid_at(&mut sim, &down));
+        let _ = b;
+    }
+
+    #[test]
+    fn deformable_crossings_are_left_to_ccd_and_scenes_without_bodies_pay_nothing() {
+        let mut settings = Settings::default();
+        settings.contact.default_thickness_m = Some(1e-3);
+        let mut sim = Simulation::new(settings).unwrap();
+        sim.add_prescribed_surface("lower", &square(0.0, 1.0), &[[0, 1, 2], [0, 2, 3]], 1e-3, 1e4)
+            .unwrap();
+        sim.add_prescribed_surface("upper", &square(0.5, 0.5), &[[0, 1, 2], [0, 2, 3]], 1e-3, 1e4)
+            .unwrap();
+        let mut x = sim.nodes.x.clone();
+        // The upper sheet tilted through the lower one.
+        x[4].z = -0.5;
+        x[5].z = -0.5;
+        assert!(!sim.contact.find_intersections(&x).is_empty());
+        assert!(valid_at(&mut sim, &x), "deformable pairs are CCD's business");
+        assert!(sim.contact.rigid_split.is_empty());
+        assert_eq!(sim.contact.validity_record.lock().unwrap().0, 0, "no test ran");
     }
 }

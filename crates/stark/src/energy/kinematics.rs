@@ -242,7 +242,8 @@ pub fn map_element<const N: usize>(
                 }
             }
         }
-        // Second-order term of the rotation: Σᵢ gᵢ ∂²xᵢ/∂ω_k∂ω_l.
+        // Second-order term of the rotation: Σᵢ gᵢ ∂²xᵢ/∂ω_k∂ω_l (collected per angular slot
+        // when it is projected on its own).
         if let NodeMap::Rigid { ang, local, pose, .. } = maps[a] {
             let s = slot(ang);
             for k in 0..3 {
@@ -429,5 +430,61 @@ mod tests {
                 );
             }
         }
+    }
+
+    #[test]
+    fn rotation_term_projection_is_psd_and_keeps_the_gradient() {
+        // A barrier-like element: a rigid point pushed along +z by a deformable node (gradient
+        // along −z, position Hessian c·n nᵀ, positive semi-definite), far from the centre of
+        // mass so that the second-order rotation term is large and indefinite.
+        let dt = 0.05;
+        let q0 = UnitQuaternion::from_euler_angles(0.3, -0.7, 1.1);
+        let pose = BodyPose::new(
+            Vector3::new(0.0, 0.0, 1.0),
+            &q0,
+            &Vector3::zeros(),
+            &Vector3::new(1.0, -2.0, 0.5),
+            dt,
+        );
+        let mut d = HyperDual::<2>::constant(0.3);
+        d.grad[0] = [0.0, 0.0, -50.0];
+        d.grad[1] = [0.0, 0.0, 50.0];
+        for (a, b, s) in [(0, 0, 1.0), (1, 1, 1.0), (0, 1, -1.0), (1, 0, -1.0)] {
+            d.hess[a][2][b][2] = 2.0e3 * s;
+        }
+        let rigid = [
+            NodeMap::Rigid {
+                lin: 0,
+                ang: 1,
+                local: Vector3::new(0.4, -0.3, -0.5),
+                pose: &pose,
+            },
+            NodeMap::Free { block: 2 },
+        ];
+        let width = 3;
+        let stride = crate::energy::term::element_stride(width);
+        let (mut exact, mut split, mut full) = (vec![0.0; stride], vec![0.0; stride], vec![0.0; stride]);
+        map_element(&rigid, &d, dt, width, MapProjection::None, &mut exact);
+        map_element(&rigid, &d, dt, width, MapProjection::SecondOrderOnly, &mut split);
+        map_element(&rigid, &d, dt, width, MapProjection::Full, &mut full);
+        assert_eq!(exact[..10], split[..10], "value and gradient");
+        let dense = |out: &[f64]| {
+            nalgebra::DMatrix::from_fn(9, 9, |i, j| {
+                out[1 + 3 * width + 9 * ((i / 3) * width + j / 3) + 3 * (i % 3) + j % 3]
+            })
+        };
+        let min_eig = |m: nalgebra::DMatrix<f64>| m.symmetric_eigenvalues().min();
+        assert!(
+            min_eig(dense(&exact)) < -1e-3,
+            "the test needs an indefinite rotation term"
+        );
+        assert!(min_eig(dense(&split)) > -1e-9 * dense(&split).norm());
+        assert!(min_eig(dense(&full)) > -1e-9 * dense(&full).norm());
+        // Without rigid nodes nothing is projected.
+        let free = [NodeMap::Free { block: 0 }, NodeMap::Free { block: 1 }];
+        let (mut a, mut b) = (vec![0.0; stride], vec![0.0; stride]);
+        map_element(&free, &d, dt, width, MapProjection::None, &mut a);
+        map_element(&free, &d, dt, width, MapProjection::SecondOrderOnly, &mut b);
+        assert_eq!(a, b);
     }
 }

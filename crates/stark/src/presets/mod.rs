@@ -9,6 +9,8 @@ pub use meshes::{
 
 pub mod materials;
 pub mod objects;
+pub mod rigid;
 
 pub use materials::{Bending, LineMaterial, SurfaceMaterial, VolumeMaterial};
 pub use objects::{LineHandle, ObstacleHandle, SurfaceHandle, VolumeHandle};
+pub use rigid::RigidHandle;

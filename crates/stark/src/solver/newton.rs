@@ -17,6 +17,9 @@ use nalgebra::Vector3;
 use serde::Serialize;
 use std::time::Instant;
 
+/// Halvings of the initial guess before it falls back to rest (`v = 0`, always valid).
+const MAX_GUESS_HALVINGS: usize = 30;
+
 /// Which criterion ended a Newton solve.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
@@ -196,7 +199,8 @@ pub fn solve(
     };
 
     // Initial guess: the previous velocity, as far along it as is valid from rest (v = 0 keeps
-    // every node at x0, which is always valid).
+    // every node at x0, which is always valid). CCD checks the chord from x0; rigid points move
+    // on arcs, so the guess is also halved until the terms accept it (`is_valid_state`).
     v.clear();
     v.resize(n, Vector3::zeros());
     problem.place(v, &mut ws.x, &mut ws.poses);
@@ -206,10 +210,26 @@ pub fn solve(
         let t0 = Instant::now();
         let from = problem.state(v, &ws.x, &ws.poses);
         let to = problem.state(&ws.trial_v, &ws.trial_x, &ws.trial_poses);
-        let alpha = max_step(terms, &from, &to);
-        for (vi, v0) in v.iter_mut().zip(&ws.trial_v) {
-            *vi = v0 * alpha;
+        let mut alpha = max_step(terms, &from, &to);
+        let start = std::mem::take(&mut ws.trial_v);
+        for halving in 0..=MAX_GUESS_HALVINGS {
+            if halving == MAX_GUESS_HALVINGS {
+                alpha = 0.0;
+            }
+            for (vi, v0) in v.iter_mut().zip(&start) {
+                *vi = v0 * alpha;
+            }
+            if alpha == 0.0 {
+                break;
+            }
+            problem.place(v, &mut ws.trial_x, &mut ws.trial_poses);
+            let guess = problem.state(v, &ws.trial_x, &ws.trial_poses);
+            if terms.iter().all(|t| t.is_valid_state(&guess)) {
+                break;
+            }
+            alpha *= 0.5;
         }
+        ws.trial_v = start;
         report.times.ccd_s += t0.elapsed().as_secs_f64();
     }
 
@@ -323,17 +343,17 @@ pub fn solve(
             problem.place(&ws.trial_v, &mut ws.trial_x, &mut ws.trial_poses);
             {
                 let trial = problem.state(&ws.trial_v, &ws.trial_x, &ws.trial_poses);
+                if !terms.iter().all(|t| t.is_valid_state(&trial)) {
+                    // A rigid point left its chord and crossed a surface (see `is_valid_state`).
+                    report.line_search_evaluations += 1;
+                    alpha *= 0.5;
+                    continue;
+                }
                 for t in terms.iter_mut() {
                     t.prepare_evaluation(&trial);
                 }
             }
             let trial = problem.state(&ws.trial_v, &ws.trial_x, &ws.trial_poses);
-            if !terms.iter().all(|t| t.is_valid_state(&trial)) {
-                // A rigid point left its chord and crossed a surface (see `is_valid_state`).
-                report.line_search_evaluations += 1;
-                alpha *= 0.5;
-                continue;
-            }
             let e = total_energy(terms, &trial);
             report.line_search_evaluations += 1;
             if e.is_finite() && e <= energy + settings.armijo * alpha * descent + noise {
@@ -360,4 +380,103 @@ pub fn solve(
         iterations: settings.max_iterations,
         residual_n: report.residual_n,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::energy::term::element_stride;
+    use std::sync::Mutex;
+
+    /// `½‖v − target‖²` on one node, admissible only while `v.x ≤ limit`; records the largest
+    /// `v.x` of every state it was evaluated or assembled at.
+    struct Fenced {
+        target: f64,
+        limit: f64,
+        largest_evaluated: Mutex<f64>,
+        rejected: Mutex<usize>,
+    }
+
+    impl Fenced {
+        fn seen(&self, state: &EvalState) {
+            let mut m = self.largest_evaluated.lock().unwrap();
+            *m = m.max(state.v[0].x);
+        }
+    }
+
+    impl EnergyTerm for Fenced {
+        fn name(&self) -> &str {
+            "fenced"
+        }
+        fn num_elements(&self) -> usize {
+            1
+        }
+        fn stencil_width(&self, _state: &EvalState) -> usize {
+            1
+        }
+        fn write_stencils(&self, _state: &EvalState, out: &mut [u32]) {
+            out[0] = 0;
+        }
+        fn energy(&self, state: &EvalState) -> f64 {
+            self.seen(state);
+            0.5 * (state.v[0] - Vector3::new(self.target, 0.0, 0.0)).norm_squared()
+        }
+        fn evaluate_element(&self, _e: usize, state: &EvalState, _mode: EvalMode, out: &mut [f64]) {
+            assert_eq!(out.len(), element_stride(1));
+            self.seen(state);
+            let g = state.v[0] - Vector3::new(self.target, 0.0, 0.0);
+            out[0] = 0.5 * g.norm_squared();
+            out[1..4].copy_from_slice(g.as_slice());
+            out[4..].iter_mut().for_each(|h| *h = 0.0);
+            for i in 0..3 {
+                out[4 + 4 * i] = 1.0;
+            }
+        }
+        fn is_valid_state(&self, state: &EvalState) -> bool {
+            let ok = state.v[0].x <= self.limit;
+            if !ok {
+                *self.rejected.lock().unwrap() += 1;
+            }
+            ok
+        }
+    }
+
+    #[test]
+    fn invalid_states_are_never_used_as_guess_or_iterate() {
+        // The start velocity 1 m/s (the initial guess) is beyond the limit 0.3 m/s: it must be
+        // halved to 0.25 before anything is evaluated there; the minimiser 0.2 is valid.
+        let mut nodes = NodeArrays::default();
+        nodes.push(&[Vector3::zeros()]);
+        nodes.v[0] = Vector3::new(1.0, 0.0, 0.0);
+        let bodies = BodyArrays::default();
+        let problem = StepProblem {
+            nodes: &nodes,
+            bodies: &bodies,
+            dt: 0.01,
+            time: 0.01,
+            gravity: Vector3::zeros(),
+        };
+        let mut term = Fenced {
+            target: 0.2,
+            limit: 0.3,
+            largest_evaluated: Mutex::new(f64::NEG_INFINITY),
+            rejected: Mutex::new(0),
+        };
+        let mut ws = NewtonWorkspace::default();
+        let mut v = Vec::new();
+        let settings = NewtonSettings {
+            linear_solver: LinearSolver::Cholesky,
+            ..NewtonSettings::default()
+        };
+        {
+            let mut terms: Vec<&mut dyn EnergyTerm> = vec![&mut term];
+            solve(&mut ws, &mut terms, &problem, &mut v, &settings).unwrap();
+        }
+        assert!((v[0].x - 0.2).abs() < 1e-9, "{:?}", v[0]);
+        let largest = *term.largest_evaluated.lock().unwrap();
+        assert!(largest <= 0.3, "evaluated at an invalid state v = {largest}");
+        // 1.0 and 0.5 were rejected as guesses, 0.25 accepted.
+        assert_eq!(*term.rejected.lock().unwrap(), 2);
+        assert_eq!(largest, 0.25);
+    }
 }
