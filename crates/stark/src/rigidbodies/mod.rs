@@ -58,6 +58,9 @@ pub struct RigidBodies {
     pub inertia: RigidInertia,
     /// Joints, motors and controllers.
     pub joints: joints::Joints,
+    /// Every joint made by the `Simulation::add_*` joint constructors, in creation order (the
+    /// joint log writes their states).
+    pub named_joints: Vec<joints::JointHandle>,
 }
 
 impl Default for RigidBodies {
@@ -66,6 +69,7 @@ impl Default for RigidBodies {
             labels: Vec::new(),
             inertia: RigidInertia::default(),
             joints: joints::Joints::new(joints::JointSet::default()),
+            named_joints: Vec::new(),
         }
     }
 }
@@ -213,6 +217,48 @@ impl Simulation {
         self.output
             .add_mesh(&label, nodes, OutputCells::Triangles(triangles.to_vec()));
         Ok(RigidMeshHandle { body, nodes, contact })
+    }
+
+    /// Give body `body` a mesh that is only drawn (vertices in the body frame, relative to its
+    /// centre of mass): its vertices become nodes that move with the body and are written to the
+    /// output frames, but it takes no part in contact. Returns its node set.
+    pub fn add_rigid_output_mesh(
+        &mut self,
+        body: RigidBodyHandle,
+        local_vertices: &[Vector3<f64>],
+        triangles: &[[usize; 3]],
+    ) -> Result<NodeSetHandle> {
+        let b = self.check_body(body)?;
+        let label = self.rigid_bodies.labels[b].clone();
+        mesh::check_indices(local_vertices.len(), triangles)
+            .map_err(|e| StarkError::InvalidInput(format!("output mesh of rigid body '{label}': {e}")))?;
+        let world: Vec<Vector3<f64>> = local_vertices
+            .iter()
+            .map(|p| self.bodies.position[b] + self.bodies.orientation[b] * p)
+            .collect();
+        let mesh_label = format!("{label}.mesh{}", self.deformables.sets.len());
+        let nodes = self.add_nodes(&mesh_label, &world)?;
+        for (k, i) in nodes.range().enumerate() {
+            self.nodes.body[i] = body.index;
+            self.nodes.rest[i] = local_vertices[k];
+        }
+        self.output
+            .add_mesh(&label, nodes, OutputCells::Triangles(triangles.to_vec()));
+        Ok(nodes)
+    }
+
+    /// Record a joint in [`RigidBodies::named_joints`], replacing the record of the same joint
+    /// (same first element) when a composite joint extends one it built.
+    pub(crate) fn register_joint(&mut self, h: joints::JointHandle) -> joints::JointHandle {
+        let list = &mut self.rigid_bodies.named_joints;
+        match list
+            .iter_mut()
+            .find(|j| j.elements.first() == h.elements.first())
+        {
+            Some(j) => *j = h.clone(),
+            None => list.push(h.clone()),
+        }
+        h
     }
 
     pub(crate) fn check_body(&self, body: RigidBodyHandle) -> Result<usize> {
