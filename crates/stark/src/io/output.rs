@@ -318,3 +318,168 @@ impl Simulation {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::vtk::read_vtk;
+    use crate::presets::meshes;
+    use crate::rigidbodies::joints::JointParams;
+    use crate::rigidbodies::MassProperties;
+    use crate::Settings;
+    use nalgebra::UnitQuaternion;
+
+    /// A box on a hinge to the world and a ball hanging from it on two ball joints with the same
+    /// label, written to `dir`.
+    fn pendulum(dir: &Path, configure: impl FnOnce(&mut Settings)) -> Simulation {
+        let mut settings = Settings::default();
+        settings.name = "pendulum".into();
+        settings.output.directory = dir.to_path_buf();
+        settings.threads = 1;
+        configure(&mut settings);
+        let mut sim = Simulation::new(settings).unwrap();
+        let size = Vector3::new(0.4, 0.05, 0.05);
+        let q = UnitQuaternion::from_axis_angle(&Vector3::y_axis(), 0.3);
+        let arm = sim
+            .add_rigid_body_with(
+                "arm",
+                &MassProperties::cuboid(1.0, size),
+                q * Vector3::new(0.2, 0.0, 0.0),
+                q,
+            )
+            .unwrap();
+        let m = meshes::box_mesh(size);
+        sim.add_rigid_output_mesh(arm, &m.vertices, &m.elements).unwrap();
+        let ball = sim
+            .add_rigid_body_with(
+                "ball",
+                &MassProperties::sphere(0.5, 0.05),
+                q * Vector3::new(0.4, 0.0, -0.1),
+                UnitQuaternion::identity(),
+            )
+            .unwrap();
+        let s = meshes::sphere_mesh(0.05, 1);
+        sim.add_rigid_collision_mesh(ball, &s.vertices, &s.elements, Some(0.001))
+            .unwrap();
+        let p = JointParams::default();
+        sim.add_hinge_joint("hinge", None, arm, Vector3::zeros(), Vector3::y(), p)
+            .unwrap();
+        let end = q * Vector3::new(0.4, 0.0, 0.0);
+        sim.add_ball_joint("hook", Some(arm), ball, end, p).unwrap();
+        sim.add_ball_joint("hook", Some(arm), ball, end, p).unwrap();
+        sim
+    }
+
+    fn lines(path: &Path) -> Vec<serde_json::Value> {
+        std::fs::read_to_string(path)
+            .unwrap()
+            .lines()
+            .map(|l| serde_json::from_str(l).unwrap())
+            .collect()
+    }
+
+    fn vec3(v: &serde_json::Value) -> Vector3<f64> {
+        let a: Vec<f64> = v.as_array().unwrap().iter().map(|c| c.as_f64().unwrap()).collect();
+        Vector3::new(a[0], a[1], a[2])
+    }
+
+    #[test]
+    fn bodies_and_joints_are_logged_every_step() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut sim = pendulum(dir.path(), |_| {});
+        let summary = sim.run(3.0 / 30.0).unwrap();
+        assert_eq!(summary.steps, 3);
+        assert_eq!((summary.rigid_bodies, summary.joints), (2, 3));
+        assert!(summary.max_joint_violation_m > 0.0 && summary.max_joint_violation_m < 1e-3);
+        let bodies = lines(&dir.path().join("pendulum.bodies.jsonl"));
+        let joints = lines(&dir.path().join("pendulum.joints.jsonl"));
+        assert_eq!((bodies.len(), joints.len()), (3, 3));
+        let last = &bodies[2];
+        assert_eq!(last["step"], 2);
+        assert_eq!(last["time_s"].as_f64().unwrap(), sim.time());
+        let names: Vec<_> = last["bodies"].as_object().unwrap().keys().cloned().collect();
+        assert_eq!(names, ["arm", "ball"]);
+        for (name, state) in sim.body_states() {
+            let logged = &last["bodies"][&name];
+            let p = vec3(&logged["position_m"]);
+            assert!((p - Vector3::from(state.position_m)).norm() < 1e-15, "{name}");
+            let w = vec3(&logged["angular_velocity_rad_s"]);
+            assert!(
+                (w - Vector3::from(state.angular_velocity_rad_s)).norm() < 1e-12,
+                "{name}"
+            );
+            assert_eq!(logged["orientation_wxyz"].as_array().unwrap().len(), 4);
+        }
+        assert!(
+            vec3(&last["bodies"]["ball"]["velocity_m_s"]).norm() > 0.01,
+            "nothing moved"
+        );
+        // Joints by label, a repeated label numbered; the hinge's angle and rate are logged.
+        let last = &joints[2]["joints"];
+        let names: Vec<_> = last.as_object().unwrap().keys().cloned().collect();
+        assert_eq!(names, ["hinge", "hook", "hook#2"]);
+        let states = sim.joint_states();
+        let hinge = &states[0].1;
+        assert_eq!(last["hinge"]["coordinate"].as_f64().unwrap(), hinge.coordinate.unwrap());
+        assert!(hinge.coordinate.unwrap().abs() > 1e-4);
+        assert!(last["hook"]["coordinate"].is_null());
+        let f = vec3(&last["hook"]["force_on_b_n"]);
+        assert!(f.norm() > 1e-3, "{f}");
+        assert!(
+            (f - Vector3::from(states[1].1.force_on_b_n)).norm() <= 1e-12 * f.norm(),
+            "{f}"
+        );
+    }
+
+    #[test]
+    fn rigid_meshes_are_in_the_frames_at_the_body_pose() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut sim = pendulum(dir.path(), |s| s.output.fps = 30.0);
+        for _ in 0..3 {
+            sim.step().unwrap();
+        }
+        assert_eq!(sim.output.frames_written, 4);
+        for (label, body) in [("arm", 0u32), ("ball", 1)] {
+            let mesh = sim.output.meshes.iter().find(|m| m.label == label).unwrap();
+            let frame = read_vtk(dir.path().join(format!("pendulum_{label}_00003.vtk"))).unwrap();
+            let x = sim.positions(mesh.set);
+            assert_eq!(frame.points.len(), x.len());
+            let h = crate::rigidbodies::RigidBodyHandle { index: body };
+            for (i, p) in frame.points.iter().enumerate() {
+                assert_eq!(*p, x[i]);
+                let on_body = sim.body_point_to_world(h, &sim.nodes.rest[mesh.set.global(i)]);
+                assert!((p - on_body).norm() < 1e-12, "{label} vertex {i}: {p} vs {on_body}");
+            }
+            // The frame before moved with the body too.
+            let before = read_vtk(dir.path().join(format!("pendulum_{label}_00000.vtk"))).unwrap();
+            assert!(
+                (before.points[0] - frame.points[0]).norm() > 1e-4,
+                "{label} did not move"
+            );
+        }
+    }
+
+    #[test]
+    fn rigid_logs_follow_the_settings() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut sim = pendulum(dir.path(), |s| {
+            s.output.joints_log = false;
+            s.output.frames = false;
+        });
+        sim.step().unwrap();
+        sim.output.flush().unwrap();
+        assert!(dir.path().join("pendulum.bodies.jsonl").exists());
+        assert!(!dir.path().join("pendulum.joints.jsonl").exists());
+        let quiet = tempfile::tempdir().unwrap();
+        let mut sim = pendulum(quiet.path(), |s| {
+            s.output.step_log = false;
+            s.output.frames = false;
+        });
+        sim.step().unwrap();
+        assert_eq!(std::fs::read_dir(quiet.path()).unwrap().count(), 0);
+        assert_eq!(
+            unique_labels(["a", "b", "a", "a"].into_iter()),
+            ["a", "b", "a#2", "a#3"]
+        );
+    }
+}

@@ -70,7 +70,6 @@ mod rigid;
 pub use rigid::{JointType, SceneRigidBody};
 
 use crate::contact::ContactHandle;
-use crate::rigidbodies::joints::JointHandle;
 use crate::deformables::{AttachmentHandle, AttachmentParams, PrescribedHandle, PrescribedParams};
 use crate::error::{Result, StarkError};
 use crate::geometry::mesh;
@@ -79,6 +78,7 @@ use crate::presets::meshes;
 use crate::presets::{
     LineHandle, LineMaterial, ObstacleHandle, SurfaceHandle, SurfaceMaterial, VolumeHandle, VolumeMaterial,
 };
+use crate::rigidbodies::joints::JointHandle;
 use crate::simulation::Simulation;
 use crate::solver::Settings;
 use nalgebra::{Rotation3, Unit, Vector3};

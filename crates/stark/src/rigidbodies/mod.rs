@@ -251,10 +251,7 @@ impl Simulation {
     /// (same first element) when a composite joint extends one it built.
     pub(crate) fn register_joint(&mut self, h: joints::JointHandle) -> joints::JointHandle {
         let list = &mut self.rigid_bodies.named_joints;
-        match list
-            .iter_mut()
-            .find(|j| j.elements.first() == h.elements.first())
-        {
+        match list.iter_mut().find(|j| j.elements.first() == h.elements.first()) {
             Some(j) => *j = h.clone(),
             None => list.push(h.clone()),
         }
