@@ -1558,6 +1558,11 @@ gravity_m_s2 = [0.0, 0.0, 0.0]
         let scene = parse(&format!("{base}{ball}{ball}"));
         let names: Vec<_> = scene.joints.iter().map(|j| j.label.as_str()).collect();
         assert_eq!(names, ["ball a-b", "ball a-b #2"]);
+        // `enabled = false` creates it switched off.
+        let off = parse(&format!("{base}{ball}enabled = false\n"));
+        let h = &off.joints[0];
+        let elements = &off.simulation.rigid_bodies.joints.potential.elements;
+        assert!(h.elements.iter().all(|&e| !elements[e as usize].enabled));
         let named = format!("{base}{ball}name = \"j\"\n{ball}name = \"j\"\n");
         let e = parse_err(&named).to_string();
         assert!(
