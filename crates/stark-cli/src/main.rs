@@ -2,6 +2,7 @@
 
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
+use stark::rigidbodies::joints::{Measure, Primitive};
 use stark::scenes::{builtin_scenes, find_scene};
 use stark::{RunSummary, Settings, Simulation};
 use std::path::PathBuf;
@@ -95,6 +96,64 @@ fn run_with_progress(sim: &mut Simulation, duration: f64, quiet: bool) -> stark:
     result
 }
 
+/// Most joints listed in the summary.
+const MAX_JOINTS_SHOWN: usize = 12;
+
+/// The rigid-body part of the summary: counts, largest joint violations and each joint's state
+/// at the end.
+fn print_rigid_summary(sim: &Simulation, s: &RunSummary) {
+    if s.rigid_bodies == 0 {
+        return;
+    }
+    println!(
+        "rigid bodies          {} bodies, {} joints (largest violation {:.2e} m, {:.2e}°)",
+        s.rigid_bodies,
+        s.joints,
+        s.max_joint_violation_m,
+        s.max_joint_violation_rad.to_degrees()
+    );
+    let joints = &sim.rigid_bodies.named_joints;
+    if joints.is_empty() {
+        return;
+    }
+    println!(
+        "  {:<22} {:>12} {:>14} {:>14} {:>10} {:>9}",
+        "joint at the end", "coordinate", "rate", "driver effort", "violation", "angle"
+    );
+    let elements = &sim.rigid_bodies.joints.potential.elements;
+    for (h, (label, state)) in joints.iter().zip(sim.joint_states()).take(MAX_JOINTS_SHOWN) {
+        let (coordinate, rate) = match (h.measure, state.coordinate, state.coordinate_rate) {
+            (Some(Measure::Angle { .. }), Some(c), Some(r)) => {
+                (format!("{:.2}°", c.to_degrees()), format!("{:.2}°/s", r.to_degrees()))
+            }
+            (Some(Measure::Position { .. }), Some(c), Some(r)) => (format!("{c:.4} m"), format!("{r:.4} m/s")),
+            _ => ("-".into(), "-".into()),
+        };
+        let effort = match h.driver.and_then(|d| elements.get(d as usize)) {
+            Some(d) if matches!(d.primitive, Primitive::AngularVelocity { .. }) => {
+                format!("{:.4} N·m", state.driver_effort)
+            }
+            Some(_) => format!("{:.4} N", state.driver_effort),
+            None => "-".into(),
+        };
+        println!(
+            "  {:<22} {:>12} {:>14} {:>14} {:>8.1e} m {:>8.1e}°",
+            label,
+            coordinate,
+            rate,
+            effort,
+            state.violation_m,
+            state.violation_rad.to_degrees()
+        );
+    }
+    if joints.len() > MAX_JOINTS_SHOWN {
+        println!(
+            "  ... and {} more (all of them, every step: the joint log)",
+            joints.len() - MAX_JOINTS_SHOWN
+        );
+    }
+}
+
 fn print_summary(s: &RunSummary, out: &std::path::Path) {
     println!("scene                 {}", s.scene);
     println!(
@@ -133,6 +192,23 @@ fn print_summary(s: &RunSummary, out: &std::path::Path) {
     println!("output                {} frames in {}", s.frames, out.display());
 }
 
+/// The logs the run wrote.
+fn print_logs(sim: &Simulation) {
+    let o = &sim.settings.output;
+    if !o.step_log {
+        return;
+    }
+    let name = &sim.settings.name;
+    let mut logs = vec![format!("{name}.steps.jsonl")];
+    if o.bodies_log && sim.num_rigid_bodies() > 0 {
+        logs.push(format!("{name}.bodies.jsonl"));
+    }
+    if o.joints_log && !sim.rigid_bodies.named_joints.is_empty() {
+        logs.push(format!("{name}.joints.jsonl"));
+    }
+    println!("logs                  {}", logs.join(", "));
+}
+
 fn run(
     scene_file: Option<PathBuf>,
     scene: Option<String>,
@@ -166,6 +242,8 @@ fn run(
     }
     let summary = run_with_progress(&mut sim, duration, quiet)?;
     print_summary(&summary, &out);
+    print_logs(&sim);
+    print_rigid_summary(&sim, &summary);
     if let Some(path) = summary_json {
         let text = serde_json::to_string_pretty(&summary).expect("serialisable summary");
         std::fs::write(&path, text).map_err(|e| stark::StarkError::Output {

@@ -241,8 +241,12 @@ mirror! {
         fps: f64,
         /// Write VTK frames (default: True).
         frames: bool,
-        /// Write the per-step log `<name>.steps.jsonl` (default: True).
+        /// Write the per-step log `<name>.steps.jsonl`; False also turns off the body and joint logs (default: True).
         step_log: bool,
+        /// Write `<name>.bodies.jsonl` (every rigid body's pose and velocities per step) when there are rigid bodies (default: True).
+        bodies_log: bool,
+        /// Write `<name>.joints.jsonl` (every joint's state per step) when there are joints (default: True).
+        joints_log: bool,
     }
 }
 

@@ -77,6 +77,15 @@ fn wrap(py: Python<'_>, scene: stark::io::LoadedScene) -> PyResult<Scene> {
             O::Volume(h) => Bound::new(py, Volume::new(id, name, h))?.into_any(),
             O::Line(h) => Bound::new(py, Line::new(id, name, h))?.into_any(),
             O::Obstacle(h) => Bound::new(py, Obstacle::new(id, name, h))?.into_any(),
+            O::RigidBody(b) => Bound::new(
+                py,
+                crate::handles::RigidBody {
+                    index: b.body.index,
+                    label: name.clone(),
+                    sim: id,
+                },
+            )?
+            .into_any(),
         };
         objects.set_item(name, handle)?;
     }

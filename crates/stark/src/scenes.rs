@@ -310,7 +310,7 @@ pub fn rb_point(mut settings: Settings) -> Result<Simulation> {
     let props = MassProperties::cuboid(1.0, size);
     let cube = meshes::box_mesh(size);
     let mut prev = sim.add_rigid_body_with("box0", &props, Vector3::zeros(), UnitQuaternion::identity())?;
-    sim.add_rigid_visual_mesh(prev, &cube.vertices, &cube.elements)?;
+    sim.add_rigid_output_mesh(prev, &cube.vertices, &cube.elements)?;
     sim.add_fix_joint("fix", prev, JointParams::default())?;
     for i in 1..10 {
         let body = sim.add_rigid_body_with(
@@ -319,7 +319,7 @@ pub fn rb_point(mut settings: Settings) -> Result<Simulation> {
             Vector3::new(0.1 * i as f64, 0.0, 0.0),
             UnitQuaternion::identity(),
         )?;
-        sim.add_rigid_visual_mesh(body, &cube.vertices, &cube.elements)?;
+        sim.add_rigid_output_mesh(body, &cube.vertices, &cube.elements)?;
         let s = if i % 2 == 1 { -0.05 } else { 0.05 };
         let p = Vector3::new(0.05 + (i - 1) as f64 * 0.1, s, s);
         sim.add_ball_joint(&format!("ball{i}"), Some(prev), body, p, JointParams::default())?;

@@ -100,6 +100,14 @@ pub struct RunSummary {
     pub mean_active_pairs: f64,
     /// Most active contact pairs in an accepted step.
     pub max_active_pairs: usize,
+    /// Number of rigid bodies.
+    pub rigid_bodies: usize,
+    /// Number of joints.
+    pub joints: usize,
+    /// Largest violation of a hard joint constraint at an accepted step, m.
+    pub max_joint_violation_m: f64,
+    /// Largest angular violation of a hard joint constraint at an accepted step, rad.
+    pub max_joint_violation_rad: f64,
 }
 
 /// A simulation: nodes, energies, settings and the time loop.
@@ -307,10 +315,8 @@ impl Simulation {
         let dir = self.settings.output.directory.clone();
         if self.settings.output.step_log {
             self.output.open_log(&dir, &self.settings.name)?;
-            if !self.bodies.is_empty() {
-                self.output.open_rigid_log(&dir, &self.settings.name)?;
-            }
         }
+        self.open_rigid_logs()?;
         if self.settings.output.frames && self.settings.output.fps > 0.0 && !self.output.meshes.is_empty() {
             self.output.write_frame(&dir, &self.settings.name, &self.nodes)?;
             self.output.next_frame_time = 1.0 / self.settings.output.fps;
@@ -524,7 +530,12 @@ impl Simulation {
     }
 
     fn record(&mut self, r: &StepReport) -> Result<()> {
+        let (violation_m, violation_rad) = self.max_joint_violations();
         let s = &mut self.summary;
+        s.rigid_bodies = self.bodies.len();
+        s.joints = self.rigid_bodies.named_joints.len();
+        s.max_joint_violation_m = s.max_joint_violation_m.max(violation_m);
+        s.max_joint_violation_rad = s.max_joint_violation_rad.max(violation_rad);
         s.steps += 1;
         s.simulated_time_s = self.time;
         s.newton_iterations += r.total_newton_iterations as u64;
@@ -547,10 +558,7 @@ impl Simulation {
             s.max_active_pairs = s.max_active_pairs.max(c.active_pairs);
         }
         self.output.log(r)?;
-        if !self.bodies.is_empty() {
-            let record = crate::rigidbodies::RigidLogRecord::of(self);
-            self.output.log_rigid(&record)?;
-        }
+        self.write_rigid_logs(r.step)?;
         let fps = self.settings.output.fps;
         if self.settings.output.frames && fps > 0.0 && !self.output.meshes.is_empty() {
             let dir = self.settings.output.directory.clone();

@@ -1,15 +1,37 @@
-//! Simulation output: VTK frames at a fixed rate and a per-step log as JSON lines.
+//! Simulation output: VTK frames at a fixed rate and per-step logs as JSON lines.
 //!
 //! Frames are `<directory>/<name>_<label>_<frame>.vtk` (legacy VTK, binary; ParaView opens the
 //! numbered series as one animation, meshio and Blender import them), one file per registered
-//! mesh, with the node velocity (m/s) as point data. The step log `<directory>/<name>.steps.jsonl`
-//! has one JSON object per accepted step.
+//! mesh (deformable objects, obstacles and rigid-body meshes, which are written at the body's
+//! pose), with the node velocity (m/s) as point data. The step log
+//! `<directory>/<name>.steps.jsonl` has one JSON object per accepted step.
+//!
+//! With rigid bodies, `<name>.bodies.jsonl` has one line per accepted step with every body's
+//! pose and velocity, keyed by label:
+//!
+//! ```text
+//! {"step":0,"time_s":0.01,"bodies":{"link0":{"position_m":[..],"orientation_wxyz":[..],"velocity_m_s":[..],"angular_velocity_rad_s":[..]}}}
+//! ```
+//!
+//! and with joints `<name>.joints.jsonl` one line per step with every joint's
+//! [`JointState`] keyed by label (a repeated label gets `#2`, `#3`, ...):
+//!
+//! ```text
+//! {"step":0,"time_s":0.01,"joints":{"hinge0":{"violation_m":..,"violation_rad":..,"force_on_b_n":[..],"torque_on_b_n_m":[..],"driver_effort":..,"coordinate":..,"coordinate_rate":..}}}
+//! ```
+//!
+//! Both are switched by `settings.output.bodies_log` and `joints_log` (on by default; off
+//! when `step_log` is off).
 
 use super::vtk::{VtkCells, VtkWriter};
 use crate::deformables::NodeSetHandle;
 use crate::error::{Result, StarkError};
+use crate::rigidbodies::joints::JointState;
+use crate::simulation::Simulation;
 use crate::state::NodeArrays;
 use nalgebra::Vector3;
+use serde::ser::SerializeMap;
+use serde::Serialize;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -47,7 +69,8 @@ pub struct Output {
     /// Time of the next frame, s.
     pub next_frame_time: f64,
     log: Option<std::io::BufWriter<std::fs::File>>,
-    rigid_log: Option<std::io::BufWriter<std::fs::File>>,
+    bodies_log: Option<std::io::BufWriter<std::fs::File>>,
+    joints_log: Option<std::io::BufWriter<std::fs::File>>,
     scratch_x: Vec<Vector3<f64>>,
     scratch_v: Vec<Vector3<f64>>,
 }
@@ -118,32 +141,345 @@ impl Output {
         Ok(())
     }
 
-    /// Start the rigid-body log `<name>.rigid.jsonl` (truncates an existing one).
-    pub fn open_rigid_log(&mut self, directory: &Path, name: &str) -> Result<PathBuf> {
-        std::fs::create_dir_all(directory).map_err(|e| io_err(directory, e))?;
-        let path = directory.join(format!("{name}.rigid.jsonl"));
-        let file = std::fs::File::create(&path).map_err(|e| io_err(&path, e))?;
-        self.rigid_log = Some(std::io::BufWriter::new(file));
-        Ok(path)
-    }
-
-    /// Append one record to the rigid-body log (if open).
-    pub fn log_rigid<T: serde::Serialize>(&mut self, record: &T) -> Result<()> {
-        if let Some(log) = &mut self.rigid_log {
-            let line = serde_json::to_string(record).expect("serialisable record");
-            writeln!(log, "{line}").map_err(|e| io_err(Path::new("rigid log"), e))?;
-        }
-        Ok(())
-    }
-
     /// Flush the logs.
     pub fn flush(&mut self) -> Result<()> {
-        if let Some(log) = &mut self.log {
-            log.flush().map_err(|e| io_err(Path::new("step log"), e))?;
-        }
-        if let Some(log) = &mut self.rigid_log {
-            log.flush().map_err(|e| io_err(Path::new("rigid log"), e))?;
+        for (log, what) in [
+            (&mut self.log, "step log"),
+            (&mut self.bodies_log, "body log"),
+            (&mut self.joints_log, "joint log"),
+        ] {
+            if let Some(log) = log {
+                log.flush().map_err(|e| io_err(Path::new(what), e))?;
+            }
         }
         Ok(())
+    }
+}
+
+fn create_log(directory: &Path, file: String) -> Result<(std::io::BufWriter<std::fs::File>, PathBuf)> {
+    std::fs::create_dir_all(directory).map_err(|e| io_err(directory, e))?;
+    let path = directory.join(file);
+    let f = std::fs::File::create(&path).map_err(|e| io_err(&path, e))?;
+    Ok((std::io::BufWriter::new(f), path))
+}
+
+fn write_line<T: Serialize>(log: &mut Option<std::io::BufWriter<std::fs::File>>, what: &str, record: &T) -> Result<()> {
+    if let Some(log) = log {
+        let line = serde_json::to_string(record).expect("serialisable record");
+        writeln!(log, "{line}").map_err(|e| io_err(Path::new(what), e))?;
+    }
+    Ok(())
+}
+
+/// Pose and velocity of a rigid body (one entry of a line of the body log).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct BodyState {
+    /// Centre of mass, m.
+    pub position_m: [f64; 3],
+    /// Orientation (body → world) as a unit quaternion `[w, x, y, z]`.
+    pub orientation_wxyz: [f64; 4],
+    /// Velocity of the centre of mass, m/s.
+    pub velocity_m_s: [f64; 3],
+    /// Angular velocity (world frame), rad/s.
+    pub angular_velocity_rad_s: [f64; 3],
+}
+
+/// Labelled records written as a JSON object in their order.
+struct Named<'a, T>(&'a [(String, T)]);
+
+impl<T: Serialize> Serialize for Named<'_, T> {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> std::result::Result<S::Ok, S::Error> {
+        let mut map = serializer.serialize_map(Some(self.0.len()))?;
+        for (k, v) in self.0 {
+            map.serialize_entry(k, v)?;
+        }
+        map.end()
+    }
+}
+
+#[derive(Serialize)]
+struct BodiesLine<'a> {
+    step: u64,
+    time_s: f64,
+    bodies: Named<'a, BodyState>,
+}
+
+#[derive(Serialize)]
+struct JointsLine<'a> {
+    step: u64,
+    time_s: f64,
+    joints: Named<'a, JointState>,
+}
+
+/// `labels` made unique: the second and later copies of a label get `#2`, `#3`, ...
+fn unique_labels<'a>(labels: impl Iterator<Item = &'a str>) -> Vec<String> {
+    let mut seen: std::collections::HashMap<&str, usize> = std::collections::HashMap::new();
+    labels
+        .map(|l| {
+            let n = seen.entry(l).or_insert(0);
+            *n += 1;
+            if *n == 1 {
+                l.to_string()
+            } else {
+                format!("{l}#{n}")
+            }
+        })
+        .collect()
+}
+
+impl Simulation {
+    /// Every rigid body's label with its current pose and velocity.
+    pub fn body_states(&self) -> Vec<(String, BodyState)> {
+        let b = &self.bodies;
+        self.rigid_bodies
+            .labels
+            .iter()
+            .enumerate()
+            .map(|(i, label)| {
+                let q = b.orientation[i].quaternion();
+                (
+                    label.clone(),
+                    BodyState {
+                        position_m: b.position[i].into(),
+                        orientation_wxyz: [q.w, q.i, q.j, q.k],
+                        velocity_m_s: b.velocity[i].into(),
+                        angular_velocity_rad_s: b.angular_velocity[i].into(),
+                    },
+                )
+            })
+            .collect()
+    }
+
+    /// Every joint of [`RigidBodies::named_joints`](crate::rigidbodies::RigidBodies::named_joints)
+    /// with its state at the last accepted step (labels made unique as in the joint log).
+    pub fn joint_states(&self) -> Vec<(String, JointState)> {
+        let joints = &self.rigid_bodies.named_joints;
+        unique_labels(joints.iter().map(|j| j.label.as_str()))
+            .into_iter()
+            .zip(joints)
+            .map(|(label, j)| (label, self.joint_state(j)))
+            .collect()
+    }
+
+    /// Largest violation of any enabled hard joint constraint at the last accepted step: (m, rad).
+    pub fn max_joint_violations(&self) -> (f64, f64) {
+        let mut worst = (0.0f64, 0.0f64);
+        for el in &self.rigid_bodies.joints.potential.elements {
+            if el.enabled && el.primitive.is_hard() {
+                if el.primitive.is_angular() {
+                    worst.1 = worst.1.max(el.readout.violation);
+                } else {
+                    worst.0 = worst.0.max(el.readout.violation);
+                }
+            }
+        }
+        worst
+    }
+
+    /// Open the body and joint logs the settings ask for (the simulation has bodies or joints).
+    /// Returns the files opened.
+    pub(crate) fn open_rigid_logs(&mut self) -> Result<Vec<PathBuf>> {
+        let o = &self.settings.output;
+        let mut files = Vec::new();
+        if o.step_log && o.bodies_log && !self.bodies.is_empty() {
+            let (log, path) = create_log(&o.directory, format!("{}.bodies.jsonl", self.settings.name))?;
+            self.output.bodies_log = Some(log);
+            files.push(path);
+        }
+        if o.step_log && o.joints_log && !self.rigid_bodies.named_joints.is_empty() {
+            let (log, path) = create_log(&o.directory, format!("{}.joints.jsonl", self.settings.name))?;
+            self.output.joints_log = Some(log);
+            files.push(path);
+        }
+        Ok(files)
+    }
+
+    /// Append the current body and joint states to their logs (those that are open).
+    pub(crate) fn write_rigid_logs(&mut self, step: u64) -> Result<()> {
+        let time_s = self.time();
+        if self.output.bodies_log.is_some() {
+            let bodies = self.body_states();
+            let line = BodiesLine {
+                step,
+                time_s,
+                bodies: Named(&bodies),
+            };
+            write_line(&mut self.output.bodies_log, "body log", &line)?;
+        }
+        if self.output.joints_log.is_some() {
+            let joints = self.joint_states();
+            let line = JointsLine {
+                step,
+                time_s,
+                joints: Named(&joints),
+            };
+            write_line(&mut self.output.joints_log, "joint log", &line)?;
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::vtk::read_vtk;
+    use crate::presets::meshes;
+    use crate::rigidbodies::joints::JointParams;
+    use crate::rigidbodies::MassProperties;
+    use crate::Settings;
+    use nalgebra::UnitQuaternion;
+
+    /// A box on a hinge to the world and a ball hanging from it on two ball joints with the same
+    /// label, written to `dir`.
+    fn pendulum(dir: &Path, configure: impl FnOnce(&mut Settings)) -> Simulation {
+        let mut settings = Settings::default();
+        settings.name = "pendulum".into();
+        settings.output.directory = dir.to_path_buf();
+        settings.threads = 1;
+        configure(&mut settings);
+        let mut sim = Simulation::new(settings).unwrap();
+        let size = Vector3::new(0.4, 0.05, 0.05);
+        let q = UnitQuaternion::from_axis_angle(&Vector3::y_axis(), 0.3);
+        let arm = sim
+            .add_rigid_body_with(
+                "arm",
+                &MassProperties::cuboid(1.0, size),
+                q * Vector3::new(0.2, 0.0, 0.0),
+                q,
+            )
+            .unwrap();
+        let m = meshes::box_mesh(size);
+        sim.add_rigid_output_mesh(arm, &m.vertices, &m.elements).unwrap();
+        let ball = sim
+            .add_rigid_body_with(
+                "ball",
+                &MassProperties::sphere(0.5, 0.05),
+                q * Vector3::new(0.4, 0.0, -0.1),
+                UnitQuaternion::identity(),
+            )
+            .unwrap();
+        let s = meshes::sphere_mesh(0.05, 1);
+        sim.add_rigid_collision_mesh(ball, &s.vertices, &s.elements, Some(0.001))
+            .unwrap();
+        let p = JointParams::default();
+        sim.add_hinge_joint("hinge", None, arm, Vector3::zeros(), Vector3::y(), p)
+            .unwrap();
+        let end = q * Vector3::new(0.4, 0.0, 0.0);
+        sim.add_ball_joint("hook", Some(arm), ball, end, p).unwrap();
+        sim.add_ball_joint("hook", Some(arm), ball, end, p).unwrap();
+        sim
+    }
+
+    fn lines(path: &Path) -> Vec<serde_json::Value> {
+        std::fs::read_to_string(path)
+            .unwrap()
+            .lines()
+            .map(|l| serde_json::from_str(l).unwrap())
+            .collect()
+    }
+
+    fn vec3(v: &serde_json::Value) -> Vector3<f64> {
+        let a: Vec<f64> = v.as_array().unwrap().iter().map(|c| c.as_f64().unwrap()).collect();
+        Vector3::new(a[0], a[1], a[2])
+    }
+
+    #[test]
+    fn bodies_and_joints_are_logged_every_step() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut sim = pendulum(dir.path(), |_| {});
+        let summary = sim.run(3.0 / 30.0).unwrap();
+        assert_eq!(summary.steps, 3);
+        assert_eq!((summary.rigid_bodies, summary.joints), (2, 3));
+        assert!(summary.max_joint_violation_m > 0.0 && summary.max_joint_violation_m < 1e-3);
+        let bodies = lines(&dir.path().join("pendulum.bodies.jsonl"));
+        let joints = lines(&dir.path().join("pendulum.joints.jsonl"));
+        assert_eq!((bodies.len(), joints.len()), (3, 3));
+        let last = &bodies[2];
+        assert_eq!(last["step"], 2);
+        assert_eq!(last["time_s"].as_f64().unwrap(), sim.time());
+        let names: Vec<_> = last["bodies"].as_object().unwrap().keys().cloned().collect();
+        assert_eq!(names, ["arm", "ball"]);
+        for (name, state) in sim.body_states() {
+            let logged = &last["bodies"][&name];
+            let p = vec3(&logged["position_m"]);
+            assert!((p - Vector3::from(state.position_m)).norm() < 1e-15, "{name}");
+            let w = vec3(&logged["angular_velocity_rad_s"]);
+            assert!(
+                (w - Vector3::from(state.angular_velocity_rad_s)).norm() < 1e-12,
+                "{name}"
+            );
+            assert_eq!(logged["orientation_wxyz"].as_array().unwrap().len(), 4);
+        }
+        assert!(
+            vec3(&last["bodies"]["ball"]["velocity_m_s"]).norm() > 0.01,
+            "nothing moved"
+        );
+        // Joints by label, a repeated label numbered; the hinge's angle and rate are logged.
+        let last = &joints[2]["joints"];
+        let names: Vec<_> = last.as_object().unwrap().keys().cloned().collect();
+        assert_eq!(names, ["hinge", "hook", "hook#2"]);
+        let states = sim.joint_states();
+        let hinge = &states[0].1;
+        assert_eq!(last["hinge"]["coordinate"].as_f64().unwrap(), hinge.coordinate.unwrap());
+        assert!(hinge.coordinate.unwrap().abs() > 1e-4);
+        assert!(last["hook"]["coordinate"].is_null());
+        let f = vec3(&last["hook"]["force_on_b_n"]);
+        assert!(f.norm() > 1e-3, "{f}");
+        assert!(
+            (f - Vector3::from(states[1].1.force_on_b_n)).norm() <= 1e-12 * f.norm(),
+            "{f}"
+        );
+    }
+
+    #[test]
+    fn rigid_meshes_are_in_the_frames_at_the_body_pose() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut sim = pendulum(dir.path(), |s| s.output.fps = 30.0);
+        for _ in 0..3 {
+            sim.step().unwrap();
+        }
+        assert_eq!(sim.output.frames_written, 4);
+        for (label, body) in [("arm", 0u32), ("ball", 1)] {
+            let mesh = sim.output.meshes.iter().find(|m| m.label == label).unwrap();
+            let frame = read_vtk(dir.path().join(format!("pendulum_{label}_00003.vtk"))).unwrap();
+            let x = sim.positions(mesh.set);
+            assert_eq!(frame.points.len(), x.len());
+            let h = crate::rigidbodies::RigidBodyHandle { index: body };
+            for (i, p) in frame.points.iter().enumerate() {
+                assert_eq!(*p, x[i]);
+                let on_body = sim.body_point_to_world(h, &sim.nodes.rest[mesh.set.global(i)]);
+                assert!((p - on_body).norm() < 1e-12, "{label} vertex {i}: {p} vs {on_body}");
+            }
+            // The frame before moved with the body too.
+            let before = read_vtk(dir.path().join(format!("pendulum_{label}_00000.vtk"))).unwrap();
+            assert!(
+                (before.points[0] - frame.points[0]).norm() > 1e-4,
+                "{label} did not move"
+            );
+        }
+    }
+
+    #[test]
+    fn rigid_logs_follow_the_settings() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut sim = pendulum(dir.path(), |s| {
+            s.output.joints_log = false;
+            s.output.frames = false;
+        });
+        sim.step().unwrap();
+        sim.output.flush().unwrap();
+        assert!(dir.path().join("pendulum.bodies.jsonl").exists());
+        assert!(!dir.path().join("pendulum.joints.jsonl").exists());
+        let quiet = tempfile::tempdir().unwrap();
+        let mut sim = pendulum(quiet.path(), |s| {
+            s.output.step_log = false;
+            s.output.frames = false;
+        });
+        sim.step().unwrap();
+        assert_eq!(std::fs::read_dir(quiet.path()).unwrap().count(), 0);
+        assert_eq!(
+            unique_labels(["a", "b", "a", "a"].into_iter()),
+            ["a", "b", "a#2", "a#3"]
+        );
     }
 }

@@ -29,6 +29,14 @@
 //!   by a [`Motion`]. `[[friction]]` calls [`Contact::set_friction`](crate::contact::Contact::set_friction)
 //!   and `[[disable_collision]]` [`Contact::disable_collision`](crate::contact::Contact::disable_collision)
 //!   for a pair of object names (the same name twice for the object with itself).
+//! - `[[rigid_body]]` calls [`Simulation::add_rigid_body`] with the mass properties of its shape
+//!   (`box`, `sphere`, `cylinder`, `torus`, a `mesh` file or inline `vertices_m` + `triangles`;
+//!   `mass_kg` or `density_kg_m3`) and gives it its mesh
+//!   ([`Simulation::add_rigid_collision_mesh`] when it has a contact thickness, else
+//!   [`Simulation::add_rigid_output_mesh`]); `fixed = true` adds a fix joint, which a `motion`
+//!   or `keyframes` drive. `[[joint]]` calls the joint constructor of its `type` between body
+//!   `a` (or `"world"`) and body `b` ([`JointType`]). Rigid bodies count as objects: friction,
+//!   disabled collisions and attachments (to the vertices of their meshes) may name them.
 //!
 //! Every error is a [`SceneError`] naming the file, the line and column where they are known
 //! (always for TOML; for JSON only for syntax, type and unknown-field errors of the file's
@@ -57,6 +65,10 @@
 //! assert_eq!(scene.name, "doc");
 //! ```
 
+mod rigid;
+
+pub use rigid::{JointType, SceneRigidBody};
+
 use crate::contact::ContactHandle;
 use crate::deformables::{AttachmentHandle, AttachmentParams, PrescribedHandle, PrescribedParams};
 use crate::error::{Result, StarkError};
@@ -66,6 +78,7 @@ use crate::presets::meshes;
 use crate::presets::{
     LineHandle, LineMaterial, ObstacleHandle, SurfaceHandle, SurfaceMaterial, VolumeHandle, VolumeMaterial,
 };
+use crate::rigidbodies::joints::JointHandle;
 use crate::simulation::Simulation;
 use crate::solver::Settings;
 use nalgebra::{Rotation3, Unit, Vector3};
@@ -96,12 +109,28 @@ pub struct LoadedScene {
     pub prescribed: Vec<ScenePrescribed>,
     /// The `[[attachment]]` entries in file order, with their labels.
     pub attachments: Vec<(String, AttachmentHandle)>,
+    /// The joints in creation order: the fix joints of fixed rigid bodies (`<body>.fixed`), in
+    /// the order of the bodies, then the `[[joint]]` entries in file order.
+    pub joints: Vec<JointHandle>,
 }
 
 impl LoadedScene {
     /// The object called `name`.
     pub fn object(&self, name: &str) -> Option<&SceneObject> {
         self.objects.iter().find(|(n, _)| n == name).map(|(_, o)| o)
+    }
+
+    /// The rigid body called `name`.
+    pub fn rigid_body(&self, name: &str) -> Option<SceneRigidBody> {
+        match self.object(name) {
+            Some(SceneObject::RigidBody(b)) => Some(*b),
+            _ => None,
+        }
+    }
+
+    /// The joint called `name`.
+    pub fn joint(&self, name: &str) -> Option<&JointHandle> {
+        self.joints.iter().find(|j| j.label == name)
     }
 }
 
@@ -116,6 +145,8 @@ pub enum SceneObject {
     Line(LineHandle),
     /// An `[[obstacle]]`.
     Obstacle(ObstacleHandle),
+    /// A `[[rigid_body]]`.
+    RigidBody(SceneRigidBody),
 }
 
 impl SceneObject {
@@ -126,6 +157,18 @@ impl SceneObject {
             SceneObject::Volume(h) => h.nodes,
             SceneObject::Line(h) => h.nodes,
             SceneObject::Obstacle(h) => h.nodes,
+            SceneObject::RigidBody(h) => h.nodes,
+        }
+    }
+
+    /// What kind of entry it is (`"surface"`, ..., `"rigid body"`).
+    pub fn kind(&self) -> &'static str {
+        match self {
+            SceneObject::Surface(_) => "surface",
+            SceneObject::Volume(_) => "volume",
+            SceneObject::Line(_) => "line",
+            SceneObject::Obstacle(_) => "obstacle",
+            SceneObject::RigidBody(_) => "rigid body",
         }
     }
 
@@ -136,6 +179,7 @@ impl SceneObject {
             SceneObject::Volume(h) => h.contact,
             SceneObject::Line(h) => h.contact,
             SceneObject::Obstacle(h) => Some(h.contact),
+            SceneObject::RigidBody(h) => h.contact,
         }
     }
 }
@@ -374,6 +418,10 @@ struct SceneFile {
     friction: Vec<FrictionEntry>,
     #[serde(default)]
     disable_collision: Vec<DisableCollisionEntry>,
+    #[serde(default)]
+    rigid_body: Vec<rigid::RigidBodyEntry>,
+    #[serde(default)]
+    joint: Vec<rigid::JointEntry>,
 }
 
 #[derive(Deserialize)]
@@ -398,7 +446,7 @@ struct LineSegments {
     count: usize,
 }
 
-#[derive(Deserialize)]
+#[derive(Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct Rotate {
     angle: f64,
@@ -597,7 +645,7 @@ impl At {
 }
 
 /// Entry arrays whose items are described by name rather than by index.
-const ENTRY_KINDS: [&str; 9] = [
+const ENTRY_KINDS: [&str; 11] = [
     "surface",
     "volume",
     "line",
@@ -607,6 +655,8 @@ const ENTRY_KINDS: [&str; 9] = [
     "gravity_ramp",
     "friction",
     "disable_collision",
+    "rigid_body",
+    "joint",
 ];
 
 /// The untyped document, for spans (TOML only) and entry labels.
@@ -746,6 +796,13 @@ impl Ctx<'_> {
     fn entry_label(&self, kind: &str, index: usize) -> String {
         let field = |k: &str| self.tree.item_str(kind, index, k);
         let n = index + 1;
+        if kind == "joint" && field("name").is_none() {
+            let a = field("a").unwrap_or_else(|| "world".into());
+            return match (field("type"), field("b")) {
+                (Some(t), Some(b)) => format!("joint #{n} ({t} '{a}' to '{b}')"),
+                _ => format!("joint #{n}"),
+            };
+        }
         match (field("name"), field("object"), field("a"), field("b")) {
             (Some(name), ..) => format!("{kind} '{name}'"),
             (None, Some(object), ..) => format!("{kind} #{n} (object '{object}')"),
@@ -1487,6 +1544,15 @@ fn build_prescribed(
             ),
         ));
     }
+    if let SceneObject::RigidBody(_) = object {
+        return Err(ctx.err(
+            &at.key("object"),
+            format!(
+                "'{}' is a rigid body: hold it with `fixed = true` in its entry (and move it with `motion` or `keyframes`)",
+                e.object
+            ),
+        ));
+    }
     let set = object.nodes();
     let defaults = PrescribedParams::default();
     let params = PrescribedParams {
@@ -1677,11 +1743,18 @@ fn contact_pair(
                 .filter(|(_, o)| o.contact().is_some())
                 .map(|(n, _)| n.as_str())
                 .collect();
+            let why = if let SceneObject::RigidBody(_) = object {
+                "rigid body '{name}' takes no part in contact: it has no contact thickness or `contact = false` \
+                 (give it `contact_thickness_m` or set `settings.contact.default_thickness_m`)"
+            } else {
+                "object '{name}' takes no part in contact: it has no contact thickness (set `contact_thickness_m` \
+                 in its material or `settings.contact.default_thickness_m`)"
+            };
             ctx.err(
                 &at,
                 format!(
-                    "object '{name}' takes no part in contact: it has no contact thickness (set `contact_thickness_m` \
-                     in its material or `settings.contact.default_thickness_m`); objects with contact: {}",
+                    "{}; objects with contact: {}",
+                    why.replace("{name}", name),
                     if with.is_empty() {
                         "none".to_string()
                     } else {
@@ -1813,7 +1886,8 @@ fn build(
         .map(|e| ("surface", &e.name))
         .chain(file.volume.iter().map(|e| ("volume", &e.name)))
         .chain(file.line.iter().map(|e| ("line", &e.name)))
-        .chain(file.obstacle.iter().map(|e| ("obstacle", &e.name)));
+        .chain(file.obstacle.iter().map(|e| ("obstacle", &e.name)))
+        .chain(file.rigid_body.iter().map(|e| ("rigid_body", &e.name)));
     let mut seen: Vec<(&str, usize, &String)> = Vec::new();
     let mut counters = std::collections::HashMap::new();
     for (kind, name) in names {
@@ -1821,6 +1895,9 @@ fn build(
         let at = At::entry(kind, *i).key("name");
         if name.is_empty() {
             return Err(ctx.err(&at, "the object name is empty"));
+        }
+        if kind == "rigid_body" && name == "world" {
+            return Err(ctx.err(&at, "'world' names the fixed world in joints: choose another name"));
         }
         if let Some((k, j, _)) = seen.iter().find(|(_, _, n)| *n == name) {
             return Err(ctx.err(
@@ -1849,6 +1926,12 @@ fn build(
         let h = build_obstacle(&mut sim, ctx, base_dir, &At::entry("obstacle", i), e)?;
         objects.push((e.name.clone(), SceneObject::Obstacle(h)));
     }
+    let mut joints = Vec::new();
+    for (i, e) in file.rigid_body.iter().enumerate() {
+        let (h, fix) = rigid::build_rigid_body(&mut sim, ctx, base_dir, &At::entry("rigid_body", i), e)?;
+        objects.push((e.name.clone(), SceneObject::RigidBody(h)));
+        joints.extend(fix);
+    }
     for (i, e) in file.friction.iter().enumerate() {
         add_friction(&mut sim, ctx, &At::entry("friction", i), &objects, e)?;
     }
@@ -1865,6 +1948,32 @@ fn build(
         let at = At::entry("attachment", i);
         attachments.push(build_attachment(&mut sim, ctx, &at, &objects, e)?);
     }
+    for (i, e) in file.joint.iter().enumerate() {
+        let at = At::entry("joint", i);
+        let name = match &e.name {
+            Some(name) => {
+                if name.is_empty() {
+                    return Err(ctx.err(&at.key("name"), "the joint name is empty"));
+                }
+                if joints.iter().any(|j: &JointHandle| &j.label == name) {
+                    return Err(ctx.err(&at.key("name"), format!("duplicate joint name '{name}'")));
+                }
+                name.clone()
+            }
+            None => {
+                // `<type> <a>-<b>`, numbered from the second of the same name.
+                let base = e.default_name();
+                let mut name = base.clone();
+                let mut k = 1;
+                while joints.iter().any(|j| j.label == name) {
+                    k += 1;
+                    name = format!("{base} #{k}");
+                }
+                name
+            }
+        };
+        joints.push(rigid::build_joint(&mut sim, ctx, &at, &objects, e, &name)?);
+    }
     add_gravity_ramps(&mut sim, ctx, &file.gravity_ramp)?;
     Ok(LoadedScene {
         simulation: sim,
@@ -1873,6 +1982,7 @@ fn build(
         objects,
         prescribed,
         attachments,
+        joints,
     })
 }
 

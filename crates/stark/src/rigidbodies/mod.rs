@@ -61,6 +61,9 @@ pub struct RigidBodies {
     pub joints: joints::Joints,
     /// Deformable nodes glued to bodies.
     pub attachments: crate::energy::PotentialTerm<attachments::RigidAttachmentSet, 2>,
+    /// Every joint made by the `Simulation::add_*` joint constructors, in creation order (the
+    /// joint log writes their states).
+    pub named_joints: Vec<joints::JointHandle>,
 }
 
 impl Default for RigidBodies {
@@ -70,6 +73,7 @@ impl Default for RigidBodies {
             inertia: RigidInertia::default(),
             joints: joints::Joints::new(joints::JointSet::default()),
             attachments: crate::energy::PotentialTerm::new(attachments::RigidAttachmentSet::default()),
+            named_joints: Vec::new(),
         }
     }
 }
@@ -219,9 +223,10 @@ impl Simulation {
         Ok(RigidMeshHandle { body, nodes, contact })
     }
 
-    /// Give body `body` a mesh for the output frames only (no contact): its vertices (body frame)
-    /// become nodes that move with the body.
-    pub fn add_rigid_visual_mesh(
+    /// Give body `body` a mesh that is only drawn (vertices in the body frame, relative to its
+    /// centre of mass): its vertices become nodes that move with the body and are written to the
+    /// output frames, but it takes no part in contact. Returns its node set.
+    pub fn add_rigid_output_mesh(
         &mut self,
         body: RigidBodyHandle,
         local_vertices: &[Vector3<f64>],
@@ -229,16 +234,14 @@ impl Simulation {
     ) -> Result<NodeSetHandle> {
         let b = self.check_body(body)?;
         let label = self.rigid_bodies.labels[b].clone();
-        if let Some(t) = triangles.iter().find(|t| t.iter().any(|&i| i >= local_vertices.len())) {
-            return Err(StarkError::InvalidInput(format!(
-                "mesh of rigid body '{label}': triangle {t:?} refers to a missing vertex"
-            )));
-        }
+        mesh::check_indices(local_vertices.len(), triangles)
+            .map_err(|e| StarkError::InvalidInput(format!("output mesh of rigid body '{label}': {e}")))?;
         let world: Vec<Vector3<f64>> = local_vertices
             .iter()
             .map(|p| self.bodies.position[b] + self.bodies.orientation[b] * p)
             .collect();
-        let nodes = self.add_nodes(&format!("{label}.visual{}", self.deformables.sets.len()), &world)?;
+        let mesh_label = format!("{label}.mesh{}", self.deformables.sets.len());
+        let nodes = self.add_nodes(&mesh_label, &world)?;
         for (k, i) in nodes.range().enumerate() {
             self.nodes.body[i] = body.index;
             self.nodes.rest[i] = local_vertices[k];
@@ -246,6 +249,17 @@ impl Simulation {
         self.output
             .add_mesh(&label, nodes, OutputCells::Triangles(triangles.to_vec()));
         Ok(nodes)
+    }
+
+    /// Record a joint in [`RigidBodies::named_joints`], replacing the record of the same joint
+    /// (same first element) when a composite joint extends one it built.
+    pub(crate) fn register_joint(&mut self, h: joints::JointHandle) -> joints::JointHandle {
+        let list = &mut self.rigid_bodies.named_joints;
+        match list.iter_mut().find(|j| j.elements.first() == h.elements.first()) {
+            Some(j) => *j = h.clone(),
+            None => list.push(h.clone()),
+        }
+        h
     }
 
     pub(crate) fn check_body(&self, body: RigidBodyHandle) -> Result<usize> {
@@ -427,100 +441,5 @@ pub(crate) fn commit_bodies(bodies: &mut BodyArrays, v: &[Vector3<f64>], n_nodes
         bodies.orientation[b] = integrate_orientation(&bodies.orientation[b], &w, dt);
         bodies.velocity[b] = vel;
         bodies.angular_velocity[b] = w;
-    }
-}
-
-/// One line of the rigid-body log `<name>.rigid.jsonl`: every body's state and every joint's
-/// readout (primitives summed per joint label) at the end of an accepted step.
-#[derive(Clone, Debug, serde::Serialize)]
-pub struct RigidLogRecord {
-    /// Time, s.
-    pub time_s: f64,
-    /// Bodies, in creation order.
-    pub bodies: Vec<BodyLogEntry>,
-    /// Joints, by label, in creation order.
-    pub joints: Vec<JointLogEntry>,
-}
-
-/// A body's state in the rigid-body log.
-#[derive(Clone, Debug, serde::Serialize)]
-pub struct BodyLogEntry {
-    /// Label.
-    pub label: String,
-    /// Centre of mass, m.
-    pub position_m: [f64; 3],
-    /// Orientation quaternion `[w, x, y, z]`.
-    pub orientation: [f64; 4],
-    /// Linear velocity, m/s.
-    pub velocity_m_s: [f64; 3],
-    /// Angular velocity, rad/s.
-    pub angular_velocity_rad_s: [f64; 3],
-}
-
-/// A joint's readout in the rigid-body log.
-#[derive(Clone, Debug, serde::Serialize)]
-pub struct JointLogEntry {
-    /// Label.
-    pub label: String,
-    /// Largest violation of its length constraints, m.
-    pub violation_m: f64,
-    /// Largest violation of its angle constraints, rad.
-    pub violation_rad: f64,
-    /// Total force on body b (world), N.
-    pub force_on_b_n: [f64; 3],
-    /// Total torque on body b about its centre of mass, N·m.
-    pub torque_on_b_n_m: [f64; 3],
-}
-
-impl RigidLogRecord {
-    /// The record of `sim`'s current state.
-    pub fn of(sim: &Simulation) -> Self {
-        let b = &sim.bodies;
-        let bodies = (0..b.len())
-            .map(|i| {
-                let q = b.orientation[i];
-                BodyLogEntry {
-                    label: sim.rigid_bodies.labels[i].clone(),
-                    position_m: b.position[i].into(),
-                    orientation: [q.w, q.i, q.j, q.k],
-                    velocity_m_s: b.velocity[i].into(),
-                    angular_velocity_rad_s: b.angular_velocity[i].into(),
-                }
-            })
-            .collect();
-        let mut joints: Vec<JointLogEntry> = Vec::new();
-        for el in &sim.rigid_bodies.joints.potential.elements {
-            let idx = match joints.iter().position(|j| j.label == el.label) {
-                Some(k) => k,
-                None => {
-                    joints.push(JointLogEntry {
-                        label: el.label.clone(),
-                        violation_m: 0.0,
-                        violation_rad: 0.0,
-                        force_on_b_n: [0.0; 3],
-                        torque_on_b_n_m: [0.0; 3],
-                    });
-                    joints.len() - 1
-                }
-            };
-            let j = &mut joints[idx];
-            let r = &el.readout;
-            if el.primitive.is_hard() {
-                if el.primitive.is_angular() {
-                    j.violation_rad = j.violation_rad.max(r.violation);
-                } else {
-                    j.violation_m = j.violation_m.max(r.violation);
-                }
-            }
-            for k in 0..3 {
-                j.force_on_b_n[k] += r.force_b_n[k];
-                j.torque_on_b_n_m[k] += r.torque_b_n_m[k];
-            }
-        }
-        RigidLogRecord {
-            time_s: sim.time(),
-            bodies,
-            joints,
-        }
     }
 }

@@ -81,8 +81,15 @@ pub struct OutputSettings {
     pub fps: f64,
     /// Write VTK frames (default: true).
     pub frames: bool,
-    /// Write the per-step log `<name>.steps.jsonl` (default: true).
+    /// Write the per-step log `<name>.steps.jsonl` (default: true). Off, it also turns off the
+    /// body and joint logs.
     pub step_log: bool,
+    /// Write `<name>.bodies.jsonl`, every rigid body's pose and velocity after each step, when
+    /// the simulation has rigid bodies (default: true).
+    pub bodies_log: bool,
+    /// Write `<name>.joints.jsonl`, every joint's state after each step, when the simulation has
+    /// joints (default: true).
+    pub joints_log: bool,
 }
 
 impl Default for OutputSettings {
@@ -92,6 +99,8 @@ impl Default for OutputSettings {
             fps: 30.0,
             frames: true,
             step_log: true,
+            bodies_log: true,
+            joints_log: true,
         }
     }
 }

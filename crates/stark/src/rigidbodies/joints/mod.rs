@@ -612,12 +612,12 @@ impl<'s> Builder<'s> {
     }
 
     fn finish(self) -> JointHandle {
-        JointHandle {
+        self.sim.register_joint(JointHandle {
             label: self.label,
             elements: self.elements,
             driver: self.driver,
             measure: self.measure,
-        }
+        })
     }
 }
 
@@ -911,7 +911,7 @@ impl Simulation {
         let mut j = Builder::new(self, label, a, Some(b), params)?;
         j.angle_limit(&perpendicular(&axis), limit_deg.to_radians());
         h.elements.extend(j.elements);
-        Ok(h)
+        Ok(self.register_joint(h))
     }
 
     /// Universal (Cardan) joint: a ball joint at `point_m` whose cross keeps `axis_a` (fixed in
@@ -983,7 +983,7 @@ impl Simulation {
         let mut j = Builder::new(self, label, a, Some(b), params)?;
         j.direction(&perpendicular(&axis));
         h.elements.extend(j.elements);
-        Ok(h)
+        Ok(self.register_joint(h))
     }
 
     /// Prismatic press (pistons, grippers): a prismatic joint driven at `target_m_s` along
@@ -1008,7 +1008,7 @@ impl Simulation {
         j.linear_velocity(&point_m, &axis, target_m_s, max_force_n, delay_m_s);
         h.elements.extend(j.elements);
         h.driver = j.driver;
-        Ok(h)
+        Ok(self.register_joint(h))
     }
 
     /// Motor: a hinge driven at `target_rad_s` about `axis` with at most `max_torque_n_m`; the
@@ -1032,7 +1032,7 @@ impl Simulation {
         j.angular_velocity(&axis, target_rad_s, max_torque_n_m, delay_rad_s);
         h.elements.extend(j.elements);
         h.driver = j.driver;
-        Ok(h)
+        Ok(self.register_joint(h))
     }
 
     /// Angular velocity controller alone (no hinge): drives `(ω_b − ω_a)·axis` to `target_rad_s`.

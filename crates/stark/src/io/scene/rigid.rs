@@ -1,0 +1,2050 @@
+//! `[[rigid_body]]` and `[[joint]]` entries of scene files.
+//!
+//! A rigid body is built from a shape (a primitive, a mesh file or an inline mesh), its mass (or
+//! density) and a pose, through [`Simulation::add_rigid_body`] and
+//! [`Simulation::add_rigid_collision_mesh`] (or [`Simulation::add_rigid_output_mesh`] when it
+//! takes no part in contact); `fixed = true` adds a fix joint, which a `motion` or `keyframes`
+//! drive through [`Simulation::set_fixed_transform`]. A joint entry calls the composite joint
+//! constructor of its `type` (`add_hinge_joint`, `add_motor`, ...).
+
+use super::{
+    check_positive, geometry_key, mesh_path, At, BoxGenerator, Ctx, CylinderGenerator, Motion, Rotate, SceneError,
+    SceneObject, SphereGenerator, MAX_SPHERE_SUBDIVISIONS,
+};
+use crate::contact::ContactHandle;
+use crate::deformables::NodeSetHandle;
+use crate::error::StarkError;
+use crate::io::mesh_files::load_triangle_mesh;
+use crate::presets::meshes;
+use crate::rigidbodies::joints::{JointHandle, JointParams, DEFAULT_CONTROLLER_DELAY};
+use crate::rigidbodies::{MassProperties, RigidBodyHandle, RigidBodyParams};
+use crate::simulation::Simulation;
+use nalgebra::{Matrix3, Quaternion, Unit, UnitQuaternion, Vector3};
+use serde::Deserialize;
+use std::f64::consts::PI;
+use std::path::Path;
+
+type Res<T> = std::result::Result<T, SceneError>;
+
+/// The handles of a `[[rigid_body]]`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SceneRigidBody {
+    /// The body.
+    pub body: RigidBodyHandle,
+    /// The vertices of its mesh (they move with the body; attachments may name them).
+    pub nodes: NodeSetHandle,
+    /// Its contact object, if it takes part in contact.
+    pub contact: Option<ContactHandle>,
+}
+
+fn default_torus_major_segments() -> usize {
+    32
+}
+
+fn default_torus_minor_segments() -> usize {
+    16
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct TorusGenerator {
+    major_radius_m: f64,
+    minor_radius_m: f64,
+    #[serde(default = "default_torus_major_segments")]
+    major_segments: usize,
+    #[serde(default = "default_torus_minor_segments")]
+    minor_segments: usize,
+}
+
+/// A pose a fixed body passes through at `time_s`; a missing position or orientation keeps the
+/// previous keyframe's.
+#[derive(Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct Keyframe {
+    time_s: f64,
+    position_m: Option<[f64; 3]>,
+    rotate_deg: Option<Rotate>,
+    quaternion_wxyz: Option<[f64; 4]>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RigidBodyEntry {
+    pub(super) name: String,
+    #[serde(rename = "box")]
+    box_: Option<BoxGenerator>,
+    sphere: Option<SphereGenerator>,
+    cylinder: Option<CylinderGenerator>,
+    torus: Option<TorusGenerator>,
+    mesh: Option<String>,
+    vertices_m: Option<Vec<[f64; 3]>>,
+    triangles: Option<Vec<[usize; 3]>>,
+    scale: Option<f64>,
+    mass_kg: Option<f64>,
+    density_kg_m3: Option<f64>,
+    inertia_kg_m2: Option<[[f64; 3]; 3]>,
+    position_m: Option<[f64; 3]>,
+    rotate_deg: Option<Rotate>,
+    quaternion_wxyz: Option<[f64; 4]>,
+    velocity_m_s: Option<[f64; 3]>,
+    angular_velocity_deg_s: Option<[f64; 3]>,
+    linear_damping_1_s: Option<f64>,
+    angular_damping_1_s: Option<f64>,
+    force_n: Option<[f64; 3]>,
+    torque_n_m: Option<[f64; 3]>,
+    contact_thickness_m: Option<f64>,
+    contact: Option<bool>,
+    fixed: Option<bool>,
+    motion: Option<Motion>,
+    keyframes: Option<Vec<Keyframe>>,
+}
+
+// ------------------------------------------------------------------------------------------
+// Small checks
+// ------------------------------------------------------------------------------------------
+
+fn finite(ctx: &Ctx, at: &At, key: &str, v: [f64; 3]) -> Res<Vector3<f64>> {
+    if v.iter().all(|c| c.is_finite()) {
+        Ok(Vector3::from(v))
+    } else {
+        Err(ctx.err(&at.key(key), format!("{key} = {v:?} must be finite")))
+    }
+}
+
+fn direction(ctx: &Ctx, at: &At, key: &str, v: [f64; 3]) -> Res<Vector3<f64>> {
+    let d = Vector3::from(v);
+    if d.iter().all(|c| c.is_finite()) && d.norm() > 1e-12 {
+        Ok(d)
+    } else {
+        Err(ctx.err(&at.key(key), format!("{key} = {v:?} must be finite and non-zero")))
+    }
+}
+
+/// An orientation from `rotate_deg = { angle, axis }` or `quaternion_wxyz = [w, x, y, z]`
+/// (normalised); `None` if neither is given.
+fn orientation(
+    ctx: &Ctx,
+    at: &At,
+    rotate: Option<&Rotate>,
+    quaternion: Option<[f64; 4]>,
+) -> Res<Option<UnitQuaternion<f64>>> {
+    match (rotate, quaternion) {
+        (Some(_), Some(_)) => Err(ctx.err(
+            &at.key("quaternion_wxyz"),
+            "give the orientation once: `rotate_deg` or `quaternion_wxyz`",
+        )),
+        (Some(r), None) => {
+            let axis = Vector3::from(r.axis);
+            if !(r.angle.is_finite() && axis.iter().all(|a| a.is_finite()) && axis.norm() > 0.0) {
+                return Err(ctx.err(
+                    &at.key("rotate_deg"),
+                    format!(
+                        "rotation by {} deg about {:?} needs a finite angle and a non-zero axis",
+                        r.angle, r.axis
+                    ),
+                ));
+            }
+            Ok(Some(UnitQuaternion::from_axis_angle(
+                &Unit::new_normalize(axis),
+                r.angle.to_radians(),
+            )))
+        }
+        (None, Some(q)) => {
+            let quat = Quaternion::new(q[0], q[1], q[2], q[3]);
+            if !(q.iter().all(|c| c.is_finite()) && quat.norm() > 1e-12) {
+                return Err(ctx.err(
+                    &at.key("quaternion_wxyz"),
+                    format!("quaternion_wxyz = {q:?} must be finite and non-zero"),
+                ));
+            }
+            Ok(Some(UnitQuaternion::from_quaternion(quat)))
+        }
+        (None, None) => Ok(None),
+    }
+}
+
+// ------------------------------------------------------------------------------------------
+// Rigid bodies
+// ------------------------------------------------------------------------------------------
+
+/// A body's shape in its body frame (centre of mass at the origin) and its mass properties.
+struct Shape {
+    vertices: Vec<Vector3<f64>>,
+    triangles: Vec<[usize; 3]>,
+    mass: MassProperties,
+}
+
+/// The mass of a primitive of `volume` m³: `mass_kg`, or `density_kg_m3` times the volume.
+fn primitive_mass(e: &RigidBodyEntry, volume: f64) -> f64 {
+    e.mass_kg.unwrap_or_else(|| e.density_kg_m3.unwrap_or(0.0) * volume)
+}
+
+/// The shape and mass properties of an entry. (When the rigid-body presets `add_box`,
+/// `add_sphere`, ... exist, the primitives can go through them.)
+fn shape(ctx: &Ctx, base_dir: &Path, at: &At, e: &RigidBodyEntry) -> Res<Shape> {
+    let key = geometry_key(
+        ctx,
+        at,
+        &[
+            ("box", e.box_.is_some()),
+            ("sphere", e.sphere.is_some()),
+            ("cylinder", e.cylinder.is_some()),
+            ("torus", e.torus.is_some()),
+        ],
+        Some(e.mesh.is_some()),
+        e.vertices_m.is_some(),
+        ("triangles", e.triangles.is_some()),
+    )?;
+    match (e.mass_kg, e.density_kg_m3) {
+        (None, None) => {
+            return Err(ctx.err(
+                at,
+                format!(
+                    "rigid body '{}' needs a mass: give `mass_kg` or `density_kg_m3`",
+                    e.name
+                ),
+            ))
+        }
+        (Some(_), Some(_)) => {
+            return Err(ctx.err(
+                &at.key("density_kg_m3"),
+                "give the mass once: `mass_kg` or `density_kg_m3`",
+            ))
+        }
+        (Some(m), None) => check_positive(ctx, at, "mass_kg", m, "kg")?,
+        (None, Some(rho)) => check_positive(ctx, at, "density_kg_m3", rho, "kg/m³")?,
+    }
+    if e.scale.is_some() && !matches!(key, "mesh" | "vertices_m") {
+        return Err(ctx.err(
+            &at.key("scale"),
+            format!("`scale` applies to `mesh` and inline geometry; give the {key}'s size instead"),
+        ));
+    }
+    let primitive = |m: meshes::Mesh<3>, mass: MassProperties| Shape {
+        vertices: m.vertices,
+        triangles: m.elements,
+        mass,
+    };
+    let mut shape = match key {
+        "box" => {
+            let g = e.box_.as_ref().expect("checked");
+            if !g.size_m.iter().all(|s| *s > 0.0 && s.is_finite()) {
+                return Err(ctx.err(
+                    &at.keys(&["box", "size_m"]),
+                    format!("size_m = {:?} must be positive and finite", g.size_m),
+                ));
+            }
+            let size = Vector3::from(g.size_m);
+            let m = primitive_mass(e, size.x * size.y * size.z);
+            primitive(meshes::box_mesh(size), MassProperties::cuboid(m, size))
+        }
+        "sphere" => {
+            let g = e.sphere.as_ref().expect("checked");
+            let at = at.key("sphere");
+            check_positive(ctx, &at, "radius_m", g.radius_m, "m")?;
+            if g.subdivisions > MAX_SPHERE_SUBDIVISIONS {
+                return Err(ctx.err(
+                    &at.key("subdivisions"),
+                    format!(
+                        "subdivisions = {} is too many (at most {MAX_SPHERE_SUBDIVISIONS})",
+                        g.subdivisions
+                    ),
+                ));
+            }
+            let r = g.radius_m;
+            let m = primitive_mass(e, 4.0 / 3.0 * PI * r * r * r);
+            primitive(meshes::sphere_mesh(r, g.subdivisions), MassProperties::sphere(m, r))
+        }
+        "cylinder" => {
+            let g = e.cylinder.as_ref().expect("checked");
+            let at = at.key("cylinder");
+            check_positive(ctx, &at, "radius_m", g.radius_m, "m")?;
+            check_positive(ctx, &at, "height_m", g.height_m, "m")?;
+            if g.slices < 3 {
+                return Err(ctx.err(&at.key("slices"), format!("slices = {} must be at least 3", g.slices)));
+            }
+            if g.stacks == 0 {
+                return Err(ctx.err(&at.key("stacks"), "stacks = 0 must be positive"));
+            }
+            let (r, h) = (g.radius_m, g.height_m);
+            let m = primitive_mass(e, PI * r * r * h);
+            primitive(
+                meshes::cylinder_mesh(r, h, g.slices, g.stacks),
+                MassProperties::cylinder(m, r, h),
+            )
+        }
+        "torus" => {
+            let g = e.torus.as_ref().expect("checked");
+            let at = at.key("torus");
+            check_positive(ctx, &at, "major_radius_m", g.major_radius_m, "m")?;
+            check_positive(ctx, &at, "minor_radius_m", g.minor_radius_m, "m")?;
+            if g.minor_radius_m >= g.major_radius_m {
+                return Err(ctx.err(
+                    &at.key("minor_radius_m"),
+                    format!(
+                        "minor_radius_m = {} must be smaller than major_radius_m = {} (the tube would cross itself)",
+                        g.minor_radius_m, g.major_radius_m
+                    ),
+                ));
+            }
+            for (k, n) in [
+                ("major_segments", g.major_segments),
+                ("minor_segments", g.minor_segments),
+            ] {
+                if n < 3 {
+                    return Err(ctx.err(&at.key(k), format!("{k} = {n} must be at least 3")));
+                }
+            }
+            let (big, small) = (g.major_radius_m, g.minor_radius_m);
+            let m = primitive_mass(e, 2.0 * PI * PI * big * small * small);
+            primitive(
+                meshes::torus_mesh(big, small, g.major_segments, g.minor_segments),
+                MassProperties::torus(m, big, small),
+            )
+        }
+        _ => {
+            let (mut vertices, triangles) = if key == "mesh" {
+                let path = mesh_path(base_dir, e.mesh.as_deref().expect("checked"));
+                let m = load_triangle_mesh(&path).map_err(|err| ctx.err(&at.key("mesh"), err.to_string()))?;
+                (m.vertices, m.elements)
+            } else {
+                let vertices: Vec<Vector3<f64>> = e
+                    .vertices_m
+                    .as_ref()
+                    .expect("checked")
+                    .iter()
+                    .map(|v| Vector3::from(*v))
+                    .collect();
+                let triangles = e.triangles.clone().expect("checked");
+                if triangles.is_empty() {
+                    return Err(ctx.err(&at.key("triangles"), "the triangle list is empty"));
+                }
+                let n = vertices.len();
+                for (i, t) in triangles.iter().enumerate() {
+                    if let Some(v) = t.iter().find(|&&v| v >= n) {
+                        return Err(ctx.err(
+                            &at.key("triangles").index(i),
+                            format!("triangle {i} refers to vertex {v}, but there are {n} vertices"),
+                        ));
+                    }
+                }
+                if !vertices.iter().all(|v| v.iter().all(|c| c.is_finite())) {
+                    return Err(ctx.err(&at.key("vertices_m"), "vertices_m must be finite"));
+                }
+                (vertices, triangles)
+            };
+            if let Some(s) = e.scale {
+                check_positive(ctx, at, "scale", s, "a factor")?;
+                crate::geometry::mesh::scale(&mut vertices, s);
+            }
+            let mass = match (e.mass_kg, e.inertia_kg_m2) {
+                // Mass and inertia given: the mesh need not be closed; its frame is the body's.
+                (Some(m), Some(_)) => MassProperties {
+                    mass_kg: m,
+                    center_of_mass_m: Vector3::zeros(),
+                    inertia_kg_m2: Matrix3::identity(),
+                },
+                _ => {
+                    let density = e.density_kg_m3.unwrap_or(1.0);
+                    let mut props = MassProperties::from_mesh(&vertices, &triangles, density).map_err(|err| {
+                        ctx.err(
+                            &at.key(key),
+                            format!(
+                                "{} (give `mass_kg` and `inertia_kg_m2` for an open mesh)",
+                                err.to_string().trim_start_matches("invalid input: ")
+                            ),
+                        )
+                    })?;
+                    if let Some(m) = e.mass_kg {
+                        props.inertia_kg_m2 *= m / props.mass_kg;
+                        props.mass_kg = m;
+                    }
+                    props
+                }
+            };
+            let com = mass.center_of_mass_m;
+            vertices.iter_mut().for_each(|v| *v -= com);
+            Shape {
+                vertices,
+                triangles,
+                mass: MassProperties {
+                    center_of_mass_m: Vector3::zeros(),
+                    ..mass
+                },
+            }
+        }
+    };
+    if let Some(j) = e.inertia_kg_m2 {
+        let inertia = Matrix3::from_row_slice(&j.concat());
+        let symmetric = (inertia - inertia.transpose()).norm() <= 1e-9 * inertia.norm();
+        if !(inertia.iter().all(|c| c.is_finite()) && symmetric && inertia.symmetric_eigenvalues().min() > 0.0) {
+            return Err(ctx.err(
+                &at.key("inertia_kg_m2"),
+                format!("inertia_kg_m2 = {j:?} must be symmetric positive definite (kg·m²)"),
+            ));
+        }
+        shape.mass.inertia_kg_m2 = inertia;
+    }
+    Ok(shape)
+}
+
+/// The poses of a keyframed body: its initial pose at t = 0, then each keyframe.
+type Poses = Vec<(f64, Vector3<f64>, UnitQuaternion<f64>)>;
+
+fn resolve_keyframes(
+    ctx: &Ctx,
+    at: &At,
+    frames: &[Keyframe],
+    start: (Vector3<f64>, UnitQuaternion<f64>),
+) -> Res<Poses> {
+    let at = at.key("keyframes");
+    if frames.is_empty() {
+        return Err(ctx.err(&at, "the keyframe list is empty"));
+    }
+    let mut poses = vec![(0.0, start.0, start.1)];
+    for (i, k) in frames.iter().enumerate() {
+        let at = at.index(i);
+        let (t_prev, p_prev, q_prev) = *poses.last().expect("initial pose");
+        if !(k.time_s.is_finite() && k.time_s > t_prev) {
+            return Err(ctx.err(
+                &at.key("time_s"),
+                format!(
+                    "time_s = {} must be finite and after the previous keyframe ({t_prev} s; the motion starts from the initial pose at 0 s)",
+                    k.time_s
+                ),
+            ));
+        }
+        let p = match k.position_m {
+            Some(p) => finite(ctx, &at, "position_m", p)?,
+            None => p_prev,
+        };
+        let q = orientation(ctx, &at, k.rotate_deg.as_ref(), k.quaternion_wxyz)?.unwrap_or(q_prev);
+        poses.push((k.time_s, p, q));
+    }
+    Ok(poses)
+}
+
+/// The pose at time `t`: linear in position, spherical-linear in orientation between
+/// keyframes; the last keyframe is held.
+fn keyframe_pose(poses: &Poses, t: f64) -> (Vector3<f64>, UnitQuaternion<f64>) {
+    let i = poses.partition_point(|p| p.0 <= t);
+    if i == 0 {
+        return (poses[0].1, poses[0].2);
+    }
+    if i == poses.len() {
+        let last = poses[i - 1];
+        return (last.1, last.2);
+    }
+    let (a, b) = (&poses[i - 1], &poses[i]);
+    let s = (t - a.0) / (b.0 - a.0);
+    (a.1 + (b.1 - a.1) * s, a.2.try_slerp(&b.2, s, 1e-12).unwrap_or(b.2))
+}
+
+/// Build a `[[rigid_body]]`: the body, its mesh, its initial state and, if fixed, its fix joint
+/// (labelled `<name>.fixed`) with the events that move it.
+pub(super) fn build_rigid_body(
+    sim: &mut Simulation,
+    ctx: &Ctx,
+    base_dir: &Path,
+    at: &At,
+    e: &RigidBodyEntry,
+) -> Res<(SceneRigidBody, Option<JointHandle>)> {
+    let shape = shape(ctx, base_dir, at, e)?;
+    let position = finite(ctx, at, "position_m", e.position_m.unwrap_or([0.0; 3]))?;
+    let q = orientation(ctx, at, e.rotate_deg.as_ref(), e.quaternion_wxyz)?.unwrap_or_else(UnitQuaternion::identity);
+    let located = |key: &'static str| move |err: StarkError| ctx.stark(&at.key(key), err);
+    let body = sim
+        .add_rigid_body(&e.name, shape.mass.mass_kg, shape.mass.inertia_kg_m2, position, q)
+        .map_err(located("name"))?;
+
+    let thickness = e.contact_thickness_m.or(sim.settings.contact.default_thickness_m);
+    let (nodes, contact) = match (e.contact, thickness) {
+        (Some(false), _) | (None, None) => {
+            let nodes = sim
+                .add_rigid_output_mesh(body, &shape.vertices, &shape.triangles)
+                .map_err(located("name"))?;
+            (nodes, None)
+        }
+        (_, Some(t)) => {
+            check_positive(ctx, at, "contact_thickness_m", t, "m")?;
+            let mesh = sim
+                .add_rigid_collision_mesh(body, &shape.vertices, &shape.triangles, Some(t))
+                .map_err(located("name"))?;
+            (mesh.nodes, Some(mesh.contact))
+        }
+        (Some(true), None) => {
+            return Err(ctx.err(
+                &at.key("contact"),
+                format!(
+                    "rigid body '{}' takes part in contact but has no contact thickness: give `contact_thickness_m` \
+                     or set `settings.contact.default_thickness_m`",
+                    e.name
+                ),
+            ))
+        }
+    };
+
+    if let Some(v) = e.velocity_m_s {
+        let v = finite(ctx, at, "velocity_m_s", v)?;
+        sim.set_body_velocity(body, v).map_err(located("velocity_m_s"))?;
+    }
+    if let Some(w) = e.angular_velocity_deg_s {
+        let w = finite(ctx, at, "angular_velocity_deg_s", w)?.map(f64::to_radians);
+        sim.set_body_angular_velocity(body, w)
+            .map_err(located("angular_velocity_deg_s"))?;
+    }
+    if let Some(f) = e.force_n {
+        let f = finite(ctx, at, "force_n", f)?;
+        sim.set_body_force(body, f).map_err(located("force_n"))?;
+    }
+    if let Some(t) = e.torque_n_m {
+        let t = finite(ctx, at, "torque_n_m", t)?;
+        sim.set_body_torque(body, t).map_err(located("torque_n_m"))?;
+    }
+    if e.linear_damping_1_s.is_some() || e.angular_damping_1_s.is_some() {
+        let params = RigidBodyParams {
+            linear_damping_1_s: e.linear_damping_1_s.unwrap_or(0.0),
+            angular_damping_1_s: e.angular_damping_1_s.unwrap_or(0.0),
+        };
+        sim.set_body_params(body, params).map_err(|err| match &err {
+            StarkError::InvalidParameter { field, .. } => ctx.stark(&at.key(field), err),
+            _ => ctx.stark(at, err),
+        })?;
+    }
+
+    let moving = match (&e.motion, &e.keyframes) {
+        (Some(_), Some(_)) => {
+            return Err(ctx.err(
+                &at.key("keyframes"),
+                "give one scripted motion: `motion` or `keyframes`",
+            ))
+        }
+        (Some(_), None) => Some("motion"),
+        (None, Some(_)) => Some("keyframes"),
+        (None, None) => None,
+    };
+    if let (Some(false), Some(key)) = (e.fixed, moving) {
+        return Err(ctx.err(
+            &at.key(key),
+            format!("a scripted `{key}` drives a fixed body: remove `fixed = false`"),
+        ));
+    }
+    let fix = if e.fixed.unwrap_or(moving.is_some()) {
+        let fix = sim
+            .add_fix_joint(&format!("{}.fixed", e.name), body, JointParams::default())
+            .map_err(located("fixed"))?;
+        if let Some(motion) = &e.motion {
+            motion
+                .validate()
+                .map_err(|(field, message)| ctx.err(&at.keys(&["motion", field]), message))?;
+            // The motion moves the initial pose (centre of mass `position`, orientation `q`).
+            let (m, h, q_start) = (motion.clone(), fix.clone(), q);
+            sim.add_time_event(motion.start_s, f64::INFINITY, move |sim, t| {
+                let (translation, rotation) = m.transform_at(t);
+                let r = UnitQuaternion::from_rotation_matrix(&rotation);
+                sim.set_fixed_transform(&h, rotation * position + translation, r * q_start)
+            });
+        }
+        if let Some(frames) = &e.keyframes {
+            let poses = resolve_keyframes(ctx, at, frames, (position, q))?;
+            let h = fix.clone();
+            sim.add_time_event(0.0, f64::INFINITY, move |sim, t| {
+                let (p, q) = keyframe_pose(&poses, t);
+                sim.set_fixed_transform(&h, p, q)
+            });
+        }
+        Some(fix)
+    } else {
+        None
+    };
+    Ok((SceneRigidBody { body, nodes, contact }, fix))
+}
+
+// ------------------------------------------------------------------------------------------
+// Joints
+// ------------------------------------------------------------------------------------------
+
+/// The `type` of a `[[joint]]`: one per composite joint constructor.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum JointType {
+    /// [`Simulation::add_ball_joint`].
+    Ball,
+    /// [`Simulation::add_ball_joint_with_cone_limit`].
+    BallCone,
+    /// [`Simulation::add_hinge_joint`].
+    Hinge,
+    /// [`Simulation::add_hinge_joint_with_limit`].
+    HingeLimit,
+    /// [`Simulation::add_universal_joint`].
+    Universal,
+    /// [`Simulation::add_slider_joint`].
+    Slider,
+    /// [`Simulation::add_prismatic_joint`].
+    Prismatic,
+    /// [`Simulation::add_prismatic_press`].
+    PrismaticPress,
+    /// [`Simulation::add_motor`].
+    Motor,
+    /// [`Simulation::add_hinge_servo`].
+    HingeServo,
+    /// [`Simulation::add_prismatic_servo`].
+    PrismaticServo,
+    /// [`Simulation::add_fix_joint`].
+    Fix,
+    /// [`Simulation::add_attachment_joint`].
+    Attachment,
+    /// [`Simulation::add_distance_joint`].
+    Distance,
+    /// [`Simulation::add_distance_limits`].
+    DistanceLimits,
+    /// [`Simulation::add_spring`].
+    Spring,
+    /// [`Simulation::add_direction_joint`].
+    Direction,
+    /// [`Simulation::add_angle_limit`].
+    AngleLimit,
+    /// [`Simulation::add_point_on_axis_joint`].
+    PointOnAxis,
+    /// [`Simulation::add_linear_velocity_controller`].
+    LinearVelocity,
+    /// [`Simulation::add_angular_velocity_controller`].
+    AngularVelocity,
+}
+
+/// What a joint's `target_schedule` sets.
+#[derive(Clone, Copy, PartialEq)]
+enum Target {
+    /// Angular velocity, deg/s.
+    AngularVelocityDeg,
+    /// Linear velocity, m/s.
+    LinearVelocity,
+    /// Servo target: deg (hinge) or m (prismatic).
+    Servo,
+}
+
+impl JointType {
+    /// The name used in files.
+    pub fn name(self) -> &'static str {
+        use JointType::*;
+        match self {
+            Ball => "ball",
+            BallCone => "ball_cone",
+            Hinge => "hinge",
+            HingeLimit => "hinge_limit",
+            Universal => "universal",
+            Slider => "slider",
+            Prismatic => "prismatic",
+            PrismaticPress => "prismatic_press",
+            Motor => "motor",
+            HingeServo => "hinge_servo",
+            PrismaticServo => "prismatic_servo",
+            Fix => "fix",
+            Attachment => "attachment",
+            Distance => "distance",
+            DistanceLimits => "distance_limits",
+            Spring => "spring",
+            Direction => "direction",
+            AngleLimit => "angle_limit",
+            PointOnAxis => "point_on_axis",
+            LinearVelocity => "linear_velocity",
+            AngularVelocity => "angular_velocity",
+        }
+    }
+
+    /// The fields it requires and those it takes optionally (besides `name`, `type`, `a`, `b`,
+    /// `enabled`).
+    fn fields(self) -> (&'static [&'static str], &'static [&'static str]) {
+        use JointType::*;
+        const HARD: &[&str] = &["stiffness", "tolerance_m", "tolerance_deg"];
+        const PRESS: &[&str] = &[
+            "target_velocity_m_s",
+            "delay_m_s",
+            "target_schedule",
+            "stiffness",
+            "tolerance_m",
+            "tolerance_deg",
+        ];
+        const MOTOR: &[&str] = &[
+            "target_velocity_deg_s",
+            "delay_deg_s",
+            "target_schedule",
+            "stiffness",
+            "tolerance_m",
+            "tolerance_deg",
+        ];
+        const SERVO_HINGE: &[&str] = &[
+            "target_deg",
+            "response_time_s",
+            "target_schedule",
+            "stiffness",
+            "tolerance_m",
+            "tolerance_deg",
+        ];
+        const SERVO_PRISMATIC: &[&str] = &[
+            "target_m",
+            "response_time_s",
+            "target_schedule",
+            "stiffness",
+            "tolerance_m",
+            "tolerance_deg",
+        ];
+        match self {
+            Ball => (&["point_m"], HARD),
+            BallCone => (&["point_m", "axis", "limit_deg"], HARD),
+            Hinge | Slider | Prismatic | PointOnAxis => (&["point_m", "axis"], HARD),
+            HingeLimit => (&["point_m", "axis", "limit_deg"], HARD),
+            Universal => (&["point_m", "axis_a", "axis_b"], HARD),
+            PrismaticPress => (&["point_m", "axis", "max_force_n"], PRESS),
+            Motor => (&["point_m", "axis", "max_torque_n_m"], MOTOR),
+            HingeServo => (&["point_m", "axis", "max_torque_n_m"], SERVO_HINGE),
+            PrismaticServo => (&["point_m", "axis", "max_force_n"], SERVO_PRISMATIC),
+            Fix | Attachment => (&[], HARD),
+            Distance => (&["point_a_m", "point_b_m"], HARD),
+            DistanceLimits => (&["point_a_m", "point_b_m", "min_m", "max_m"], HARD),
+            Spring => (
+                &["point_a_m", "point_b_m", "spring_stiffness_n_m"],
+                &["damping_n_s_m", "limits_m", "stiffness", "tolerance_m", "tolerance_deg"],
+            ),
+            Direction => (&["axis"], HARD),
+            AngleLimit => (&["axis", "limit_deg"], HARD),
+            LinearVelocity => (
+                &["point_m", "axis", "max_force_n"],
+                &["target_velocity_m_s", "delay_m_s", "target_schedule"],
+            ),
+            AngularVelocity => (
+                &["axis", "max_torque_n_m"],
+                &["target_velocity_deg_s", "delay_deg_s", "target_schedule"],
+            ),
+        }
+    }
+
+    /// The target field (given, or replaced by a `target_schedule`) and what it sets.
+    fn target(self) -> Option<(&'static str, Target)> {
+        use JointType::*;
+        match self {
+            Motor | AngularVelocity => Some(("target_velocity_deg_s", Target::AngularVelocityDeg)),
+            PrismaticPress | LinearVelocity => Some(("target_velocity_m_s", Target::LinearVelocity)),
+            HingeServo => Some(("target_deg", Target::Servo)),
+            PrismaticServo => Some(("target_m", Target::Servo)),
+            _ => None,
+        }
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct JointEntry {
+    pub(super) name: Option<String>,
+    #[serde(rename = "type")]
+    pub(super) kind: JointType,
+    pub(super) a: Option<String>,
+    pub(super) b: String,
+    point_m: Option<[f64; 3]>,
+    point_a_m: Option<[f64; 3]>,
+    point_b_m: Option<[f64; 3]>,
+    axis: Option<[f64; 3]>,
+    axis_a: Option<[f64; 3]>,
+    axis_b: Option<[f64; 3]>,
+    limit_deg: Option<f64>,
+    min_m: Option<f64>,
+    max_m: Option<f64>,
+    limits_m: Option<[f64; 2]>,
+    target_velocity_m_s: Option<f64>,
+    target_velocity_deg_s: Option<f64>,
+    target_deg: Option<f64>,
+    target_m: Option<f64>,
+    target_schedule: Option<Vec<[f64; 2]>>,
+    max_force_n: Option<f64>,
+    max_torque_n_m: Option<f64>,
+    delay_m_s: Option<f64>,
+    delay_deg_s: Option<f64>,
+    response_time_s: Option<f64>,
+    spring_stiffness_n_m: Option<f64>,
+    damping_n_s_m: Option<f64>,
+    stiffness: Option<f64>,
+    tolerance_m: Option<f64>,
+    tolerance_deg: Option<f64>,
+    enabled: Option<bool>,
+}
+
+impl JointEntry {
+    /// Every type-specific field and whether it is given.
+    fn given(&self) -> [(&'static str, bool); 25] {
+        [
+            ("point_m", self.point_m.is_some()),
+            ("point_a_m", self.point_a_m.is_some()),
+            ("point_b_m", self.point_b_m.is_some()),
+            ("axis", self.axis.is_some()),
+            ("axis_a", self.axis_a.is_some()),
+            ("axis_b", self.axis_b.is_some()),
+            ("limit_deg", self.limit_deg.is_some()),
+            ("min_m", self.min_m.is_some()),
+            ("max_m", self.max_m.is_some()),
+            ("limits_m", self.limits_m.is_some()),
+            ("target_velocity_m_s", self.target_velocity_m_s.is_some()),
+            ("target_velocity_deg_s", self.target_velocity_deg_s.is_some()),
+            ("target_deg", self.target_deg.is_some()),
+            ("target_m", self.target_m.is_some()),
+            ("target_schedule", self.target_schedule.is_some()),
+            ("max_force_n", self.max_force_n.is_some()),
+            ("max_torque_n_m", self.max_torque_n_m.is_some()),
+            ("delay_m_s", self.delay_m_s.is_some()),
+            ("delay_deg_s", self.delay_deg_s.is_some()),
+            ("response_time_s", self.response_time_s.is_some()),
+            ("spring_stiffness_n_m", self.spring_stiffness_n_m.is_some()),
+            ("damping_n_s_m", self.damping_n_s_m.is_some()),
+            ("stiffness", self.stiffness.is_some()),
+            ("tolerance_m", self.tolerance_m.is_some()),
+            ("tolerance_deg", self.tolerance_deg.is_some()),
+        ]
+    }
+
+    /// The default name: `<type> <a>-<b>`.
+    pub(super) fn default_name(&self) -> String {
+        format!(
+            "{} {}-{}",
+            self.kind.name(),
+            self.a.as_deref().unwrap_or("world"),
+            self.b
+        )
+    }
+}
+
+fn list(keys: &[&str]) -> String {
+    keys.iter().map(|k| format!("`{k}`")).collect::<Vec<_>>().join(", ")
+}
+
+/// The body a joint side names: `None` for "world".
+fn joint_body(ctx: &Ctx, at: &At, objects: &[(String, SceneObject)], name: &str) -> Res<Option<RigidBodyHandle>> {
+    if name == "world" {
+        return Ok(None);
+    }
+    let bodies = || {
+        let names: Vec<_> = objects
+            .iter()
+            .filter(|(_, o)| matches!(o, SceneObject::RigidBody(_)))
+            .map(|(n, _)| n.as_str())
+            .collect();
+        if names.is_empty() {
+            "world (no rigid bodies defined)".to_string()
+        } else {
+            format!("world, {}", names.join(", "))
+        }
+    };
+    match objects.iter().find(|(n, _)| n == name).map(|(_, o)| o) {
+        Some(SceneObject::RigidBody(b)) => Ok(Some(b.body)),
+        Some(other) => Err(ctx.err(
+            at,
+            format!(
+                "'{name}' is a {}, not a rigid body, expected one of {}",
+                other.kind(),
+                bodies()
+            ),
+        )),
+        None => Err(ctx.err(at, format!("unknown rigid body '{name}', expected one of {}", bodies()))),
+    }
+}
+
+/// The value of a piecewise-linear schedule `[[t, value], ...]` at `t` (held outside).
+fn schedule_value(points: &[[f64; 2]], t: f64) -> f64 {
+    let i = points.partition_point(|p| p[0] <= t);
+    if i == 0 {
+        return points[0][1];
+    }
+    if i == points.len() {
+        return points[i - 1][1];
+    }
+    let (a, b) = (points[i - 1], points[i]);
+    a[1] + (b[1] - a[1]) * (t - a[0]) / (b[0] - a[0])
+}
+
+/// Set a joint's target (in the file's units) through the API.
+fn set_target(sim: &mut Simulation, h: &JointHandle, kind: Target, value: f64) -> crate::Result<()> {
+    match kind {
+        Target::AngularVelocityDeg => sim.set_joint_target_velocity(h, value.to_radians()),
+        Target::LinearVelocity => sim.set_joint_target_velocity(h, value),
+        Target::Servo => sim.set_servo_target(h, value),
+    }
+}
+
+/// Build a `[[joint]]` labelled `name`.
+pub(super) fn build_joint(
+    sim: &mut Simulation,
+    ctx: &Ctx,
+    at: &At,
+    objects: &[(String, SceneObject)],
+    e: &JointEntry,
+    name: &str,
+) -> Res<JointHandle> {
+    use JointType::*;
+    let kind = e.kind;
+    let type_name = kind.name();
+    let (required, optional) = kind.fields();
+    let target = kind.target();
+    for (key, given) in e.given() {
+        if given && !required.contains(&key) && !optional.contains(&key) {
+            return Err(ctx.err(
+                &at.key(key),
+                format!(
+                    "`{key}` does not apply to a {type_name} joint, which takes {}",
+                    list(&[required, optional].concat())
+                ),
+            ));
+        }
+    }
+    for key in required {
+        if !e.given().iter().any(|(k, g)| k == key && *g) {
+            return Err(ctx.err(
+                &at.key("type"),
+                format!("a {type_name} joint needs `{key}` (it takes {})", list(required)),
+            ));
+        }
+    }
+    if let Some((key, _)) = target {
+        let has_target = e.given().iter().any(|(k, g)| *k == key && *g);
+        match (has_target, e.target_schedule.is_some()) {
+            (false, false) => {
+                return Err(ctx.err(
+                    &at.key("type"),
+                    format!("a {type_name} joint needs `{key}` or a `target_schedule`"),
+                ))
+            }
+            (true, true) => {
+                return Err(ctx.err(
+                    &at.key("target_schedule"),
+                    format!("give the target once: `{key}` or `target_schedule`"),
+                ))
+            }
+            _ => {}
+        }
+    }
+
+    let a_name = e.a.as_deref().unwrap_or("world");
+    let a = joint_body(ctx, &at.key("a"), objects, a_name)?;
+    if e.b == "world" {
+        return Err(ctx.err(
+            &at.key("b"),
+            "`b` must be a rigid body (a joint moves body b relative to a; `a` may be \"world\")",
+        ));
+    }
+    let b = joint_body(ctx, &at.key("b"), objects, &e.b)?.expect("not the world");
+    if a == Some(b) {
+        return Err(ctx.err(&at.key("b"), format!("the joint connects '{}' to itself", e.b)));
+    }
+    match (kind, a) {
+        (Fix, Some(_)) => {
+            return Err(ctx.err(
+                &at.key("a"),
+                "a fix joint holds body b in the world: leave `a` out (or \"world\")",
+            ))
+        }
+        (Attachment, None) => {
+            return Err(ctx.err(
+                &at.key("a"),
+                "an attachment glues two bodies: `a` must be a rigid body (use a fix joint to hold b in the world)",
+            ))
+        }
+        _ => {}
+    }
+
+    let point = |key: &str, v: Option<[f64; 3]>| finite(ctx, at, key, v.unwrap_or_default());
+    let axis = |key: &str, v: Option<[f64; 3]>| direction(ctx, at, key, v.unwrap_or_default());
+    let number = |key: &str, v: Option<f64>| -> Res<f64> {
+        let v = v.unwrap_or_default();
+        if v.is_finite() {
+            Ok(v)
+        } else {
+            Err(ctx.err(&at.key(key), format!("{key} = {v} must be finite")))
+        }
+    };
+    let defaults = JointParams::default();
+    let params = JointParams {
+        stiffness: e.stiffness.unwrap_or(defaults.stiffness),
+        tolerance_m: e.tolerance_m.unwrap_or(defaults.tolerance_m),
+        tolerance_deg: e.tolerance_deg.unwrap_or(defaults.tolerance_deg),
+    };
+    // The initial target: given, or the schedule's value at t = 0.
+    let initial_target = |key: &str, v: Option<f64>| -> Res<f64> {
+        match &e.target_schedule {
+            Some(s) if !s.is_empty() => Ok(schedule_value(s, 0.0)),
+            _ => number(key, v),
+        }
+    };
+    let delay_rad_s = match e.delay_deg_s {
+        Some(d) => d.to_radians(),
+        None => DEFAULT_CONTROLLER_DELAY,
+    };
+    let delay_m_s = e.delay_m_s.unwrap_or(DEFAULT_CONTROLLER_DELAY);
+    if let (Universal, Some(aa), Some(ab)) = (kind, e.axis_a, e.axis_b) {
+        let (aa, ab) = (axis("axis_a", Some(aa))?, axis("axis_b", Some(ab))?);
+        if aa.normalize().dot(&ab.normalize()).abs() > 1e-6 {
+            return Err(ctx.err(
+                &at.key("axis_b"),
+                format!(
+                    "axis_b = {:?} must be perpendicular to axis_a = {:?}",
+                    e.axis_b.unwrap_or_default(),
+                    e.axis_a.unwrap_or_default()
+                ),
+            ));
+        }
+    }
+
+    let result = match kind {
+        Ball => sim.add_ball_joint(name, a, b, point("point_m", e.point_m)?, params),
+        BallCone => sim.add_ball_joint_with_cone_limit(
+            name,
+            a,
+            b,
+            point("point_m", e.point_m)?,
+            axis("axis", e.axis)?,
+            number("limit_deg", e.limit_deg)?,
+            params,
+        ),
+        Hinge => sim.add_hinge_joint(name, a, b, point("point_m", e.point_m)?, axis("axis", e.axis)?, params),
+        HingeLimit => sim.add_hinge_joint_with_limit(
+            name,
+            a,
+            b,
+            point("point_m", e.point_m)?,
+            axis("axis", e.axis)?,
+            number("limit_deg", e.limit_deg)?,
+            params,
+        ),
+        Universal => sim.add_universal_joint(
+            name,
+            a,
+            b,
+            point("point_m", e.point_m)?,
+            axis("axis_a", e.axis_a)?,
+            axis("axis_b", e.axis_b)?,
+            params,
+        ),
+        Slider => sim.add_slider_joint(name, a, b, point("point_m", e.point_m)?, axis("axis", e.axis)?, params),
+        Prismatic => sim.add_prismatic_joint(name, a, b, point("point_m", e.point_m)?, axis("axis", e.axis)?, params),
+        PointOnAxis => {
+            sim.add_point_on_axis_joint(name, a, b, point("point_m", e.point_m)?, axis("axis", e.axis)?, params)
+        }
+        PrismaticPress => sim.add_prismatic_press(
+            name,
+            a,
+            b,
+            point("point_m", e.point_m)?,
+            axis("axis", e.axis)?,
+            initial_target("target_velocity_m_s", e.target_velocity_m_s)?,
+            number("max_force_n", e.max_force_n)?,
+            delay_m_s,
+            params,
+        ),
+        Motor => sim.add_motor(
+            name,
+            a,
+            b,
+            point("point_m", e.point_m)?,
+            axis("axis", e.axis)?,
+            initial_target("target_velocity_deg_s", e.target_velocity_deg_s)?.to_radians(),
+            number("max_torque_n_m", e.max_torque_n_m)?,
+            delay_rad_s,
+            params,
+        ),
+        HingeServo => sim.add_hinge_servo(
+            name,
+            a,
+            b,
+            point("point_m", e.point_m)?,
+            axis("axis", e.axis)?,
+            initial_target("target_deg", e.target_deg)?,
+            number("max_torque_n_m", e.max_torque_n_m)?,
+            e.response_time_s.unwrap_or(0.0),
+            params,
+        ),
+        PrismaticServo => sim.add_prismatic_servo(
+            name,
+            a,
+            b,
+            point("point_m", e.point_m)?,
+            axis("axis", e.axis)?,
+            initial_target("target_m", e.target_m)?,
+            number("max_force_n", e.max_force_n)?,
+            e.response_time_s.unwrap_or(0.0),
+            params,
+        ),
+        Fix => sim.add_fix_joint(name, b, params),
+        Attachment => sim.add_attachment_joint(name, a.expect("checked"), b, params),
+        Distance => sim.add_distance_joint(
+            name,
+            a,
+            b,
+            point("point_a_m", e.point_a_m)?,
+            point("point_b_m", e.point_b_m)?,
+            params,
+        ),
+        DistanceLimits => sim.add_distance_limits(
+            name,
+            a,
+            b,
+            point("point_a_m", e.point_a_m)?,
+            point("point_b_m", e.point_b_m)?,
+            number("min_m", e.min_m)?,
+            number("max_m", e.max_m)?,
+            params,
+        ),
+        Spring => sim.add_spring(
+            name,
+            a,
+            b,
+            point("point_a_m", e.point_a_m)?,
+            point("point_b_m", e.point_b_m)?,
+            number("spring_stiffness_n_m", e.spring_stiffness_n_m)?,
+            e.damping_n_s_m.unwrap_or(0.0),
+            e.limits_m.map(|[lo, hi]| (lo, hi)),
+            params,
+        ),
+        Direction => sim.add_direction_joint(name, a, b, axis("axis", e.axis)?, params),
+        AngleLimit => sim.add_angle_limit(
+            name,
+            a,
+            b,
+            axis("axis", e.axis)?,
+            number("limit_deg", e.limit_deg)?,
+            params,
+        ),
+        LinearVelocity => sim.add_linear_velocity_controller(
+            name,
+            a,
+            b,
+            point("point_m", e.point_m)?,
+            axis("axis", e.axis)?,
+            initial_target("target_velocity_m_s", e.target_velocity_m_s)?,
+            number("max_force_n", e.max_force_n)?,
+            delay_m_s,
+        ),
+        AngularVelocity => sim.add_angular_velocity_controller(
+            name,
+            a,
+            b,
+            axis("axis", e.axis)?,
+            initial_target("target_velocity_deg_s", e.target_velocity_deg_s)?.to_radians(),
+            number("max_torque_n_m", e.max_torque_n_m)?,
+            delay_rad_s,
+        ),
+    };
+    let handle = result.map_err(|err| joint_error(ctx, at, e, err))?;
+
+    if e.enabled == Some(false) {
+        sim.set_joint_enabled(&handle, false)
+            .map_err(|err| ctx.stark(&at.key("enabled"), err))?;
+    }
+    if let (Some(points), Some((_, kind))) = (&e.target_schedule, target) {
+        let at = at.key("target_schedule");
+        if points.is_empty() {
+            return Err(ctx.err(&at, "the schedule is empty: give `[[time_s, target], ...]`"));
+        }
+        for (i, p) in points.iter().enumerate() {
+            let after = i == 0 || p[0] > points[i - 1][0];
+            if !(p[0].is_finite() && p[1].is_finite() && after) {
+                return Err(ctx.err(
+                    &at.index(i),
+                    format!("[{}, {}] needs finite values and times that increase", p[0], p[1]),
+                ));
+            }
+        }
+        let (points, h) = (points.clone(), handle.clone());
+        sim.add_time_event(0.0, f64::INFINITY, move |sim, t| {
+            set_target(sim, &h, kind, schedule_value(&points, t))
+        });
+    }
+    Ok(handle)
+}
+
+/// Locate a library error of a joint constructor: a named parameter at its field, anything else
+/// at the entry's `type`.
+fn joint_error(ctx: &Ctx, at: &At, e: &JointEntry, err: StarkError) -> SceneError {
+    let key = match &err {
+        StarkError::InvalidParameter { field, .. } => match *field {
+            "spring stiffness" => "spring_stiffness_n_m",
+            "damping" => "damping_n_s_m",
+            "max force/torque" if e.max_force_n.is_some() => "max_force_n",
+            "max force/torque" => "max_torque_n_m",
+            "delay" if e.delay_m_s.is_some() => "delay_m_s",
+            "delay" if e.delay_deg_s.is_some() => "delay_deg_s",
+            "delay" => "type",
+            other => other,
+        },
+        _ if e.min_m.is_some() => "min_m",
+        _ if e.limits_m.is_some() => "limits_m",
+        _ => "type",
+    };
+    ctx.stark(&at.key(key), err)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{load_scene_with, parse_scene, parse_scene_with, LoadedScene};
+    use super::*;
+    use crate::energy::Node;
+    use crate::rigidbodies::joints::Primitive;
+    use crate::solver::Settings;
+    use std::path::PathBuf;
+
+    fn repo_scene(name: &str) -> PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes").join(name)
+    }
+
+    /// No files written, one thread (deterministic and quiet).
+    fn quiet(s: &mut Settings) {
+        s.output.frames = false;
+        s.output.step_log = false;
+        s.threads = 1;
+    }
+
+    fn parse(text: &str) -> LoadedScene {
+        parse_scene_with(text, "test.toml", Path::new("."), quiet).unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    fn parse_err(text: &str) -> SceneError {
+        match parse_scene_with(text, "test.toml", Path::new("."), quiet) {
+            Ok(_) => panic!("the scene parsed:\n{text}"),
+            Err(StarkError::SceneFile(e)) => e,
+            Err(other) => panic!("not a scene error: {other}"),
+        }
+    }
+
+    fn bits(x: &[Vector3<f64>]) -> Vec<[u64; 3]> {
+        x.iter()
+            .map(|p| [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()])
+            .collect()
+    }
+
+    /// Positions, orientations and velocities of every body, as bits.
+    fn body_bits(sim: &Simulation) -> Vec<u64> {
+        let b = &sim.bodies;
+        (0..b.len())
+            .flat_map(|i| {
+                let q = b.orientation[i].coords;
+                b.position[i]
+                    .iter()
+                    .chain(q.iter())
+                    .chain(b.velocity[i].iter())
+                    .chain(b.angular_velocity[i].iter())
+                    .map(|c| c.to_bits())
+                    .collect::<Vec<_>>()
+            })
+            .collect()
+    }
+
+    fn close(a: &Vector3<f64>, b: &Vector3<f64>, tol: f64) -> bool {
+        (a - b).norm() <= tol
+    }
+
+    #[test]
+    fn shapes_masses_poses_and_initial_state() {
+        let scene = parse(
+            r#"
+duration_s = 1.0
+[settings]
+contact.default_thickness_m = 0.001
+[[rigid_body]]
+name = "crate"
+box = { size_m = [0.1, 0.2, 0.3] }
+density_kg_m3 = 500.0
+position_m = [1.0, 2.0, 3.0]
+rotate_deg = { angle = 90.0, axis = [0.0, 0.0, 2.0] }
+velocity_m_s = [0.1, 0.0, 0.0]
+angular_velocity_deg_s = [0.0, 0.0, 180.0]
+linear_damping_1_s = 0.5
+force_n = [0.0, 0.0, 1.0]
+torque_n_m = [0.0, 0.1, 0.0]
+[[rigid_body]]
+name = "ball"
+sphere = { radius_m = 0.1, subdivisions = 1 }
+mass_kg = 2.0
+position_m = [5.0, 0.0, 0.0]
+quaternion_wxyz = [0.0, 2.0, 0.0, 0.0]
+contact = false
+[[rigid_body]]
+name = "can"
+cylinder = { radius_m = 0.05, height_m = 0.2, slices = 8 }
+mass_kg = 0.3
+position_m = [-5.0, 0.0, 0.0]
+contact_thickness_m = 0.003
+[[rigid_body]]
+name = "ring"
+torus = { major_radius_m = 0.2, minor_radius_m = 0.05, major_segments = 8, minor_segments = 6 }
+density_kg_m3 = 1000.0
+position_m = [0.0, 5.0, 0.0]
+[[rigid_body]]
+name = "tet"
+vertices_m = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+triangles = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]
+scale = 0.5
+mass_kg = 6.0
+position_m = [0.0, -5.0, 0.0]
+"#,
+        );
+        let sim = &scene.simulation;
+        assert_eq!(sim.num_rigid_bodies(), 5);
+        let body = |n: &str| scene.rigid_body(n).unwrap_or_else(|| panic!("no body {n}"));
+        // The box: mass from the density, pose, velocities, damping, force and torque.
+        let c = body("crate");
+        let size = Vector3::new(0.1, 0.2, 0.3);
+        let mass = 500.0 * (0.1 * 0.2 * 0.3);
+        assert_eq!(sim.bodies.mass[c.body.i()], mass);
+        assert_eq!(
+            sim.bodies.inertia_local[c.body.i()],
+            MassProperties::cuboid(mass, size).inertia_kg_m2
+        );
+        assert_eq!(sim.body_position(c.body), Vector3::new(1.0, 2.0, 3.0));
+        let q = sim.body_orientation(c.body);
+        assert!((q.angle() - PI / 2.0).abs() < 1e-15 && close(&q.axis().unwrap(), &Vector3::z(), 1e-15));
+        assert_eq!(sim.body_velocity(c.body), Vector3::new(0.1, 0.0, 0.0));
+        assert_eq!(sim.body_angular_velocity(c.body), Vector3::new(0.0, 0.0, PI));
+        assert_eq!(sim.body_params(c.body).unwrap().linear_damping_1_s, 0.5);
+        assert_eq!(sim.body_params(c.body).unwrap().angular_damping_1_s, 0.0);
+        assert_eq!(sim.bodies.force[0], Vector3::new(0.0, 0.0, 1.0));
+        assert_eq!(sim.bodies.torque[0], Vector3::new(0.0, 0.1, 0.0));
+        // Its mesh follows the pose: the corner (−x, −y, −z)/2 turned 90° about z.
+        let corner = sim.positions(c.nodes)[0];
+        assert!(close(&corner, &Vector3::new(1.1, 1.95, 2.85), 1e-15), "{corner}");
+        // The sphere: a half turn about x, no contact.
+        let b = body("ball");
+        assert_eq!(
+            sim.bodies.inertia_local[b.body.i()],
+            MassProperties::sphere(2.0, 0.1).inertia_kg_m2
+        );
+        assert!((sim.body_orientation(b.body).angle() - PI).abs() < 1e-15);
+        assert!(b.contact.is_none());
+        assert_eq!(b.nodes.len, 42);
+        // The cylinder's and torus's meshes and masses.
+        assert_eq!(body("can").nodes.len, 2 * 8 + 2);
+        let ring = body("ring");
+        assert_eq!(ring.nodes.len, 48);
+        let ring_mass = 1000.0 * (2.0 * PI * PI * 0.2 * 0.05 * 0.05);
+        assert_eq!(sim.bodies.mass[ring.body.i()], ring_mass);
+        // The inline tetrahedron: scaled, recentred at its centre of mass, mass scaled to 6 kg.
+        let tet = body("tet");
+        let x = sim.positions(tet.nodes);
+        assert!(close(&x[0], &Vector3::new(-0.125, -5.125, -0.125), 1e-15), "{}", x[0]);
+        assert!(close(&x[1], &Vector3::new(0.375, -5.125, -0.125), 1e-15), "{}", x[1]);
+        let v: Vec<_> = [[0.0, 0.0, 0.0], [0.5, 0.0, 0.0], [0.0, 0.5, 0.0], [0.0, 0.0, 0.5]]
+            .iter()
+            .map(|p| Vector3::from(*p))
+            .collect();
+        let tris = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
+        let props = MassProperties::from_mesh(&v, &tris, 1.0).unwrap();
+        let expected = props.inertia_kg_m2 * (6.0 / props.mass_kg);
+        assert!((sim.bodies.inertia_local[tet.body.i()] - expected).norm() < 1e-15);
+        // Contact: thickness given, else the default; the sphere has none.
+        let thickness: Vec<_> = sim
+            .contact
+            .objects()
+            .iter()
+            .map(|o| (o.label.clone(), o.thickness_m))
+            .collect();
+        assert_eq!(
+            thickness,
+            [
+                ("crate".to_string(), 0.001),
+                ("can".to_string(), 0.003),
+                ("ring".to_string(), 0.001),
+                ("tet".to_string(), 0.001)
+            ]
+        );
+        // Every body's mesh is in the frames.
+        let meshes: Vec<_> = sim.output.meshes.iter().map(|m| m.label.as_str()).collect();
+        assert_eq!(meshes, ["crate", "ball", "can", "ring", "tet"]);
+        assert!(scene.joints.is_empty());
+    }
+
+    #[test]
+    fn keyframes_interpolate_and_hold() {
+        let q1 = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), PI / 2.0);
+        let poses: Poses = vec![
+            (0.0, Vector3::new(2.0, 0.0, 0.0), UnitQuaternion::identity()),
+            (0.5, Vector3::new(2.0, 0.0, 1.0), q1),
+            (1.0, Vector3::new(3.0, 0.0, 1.0), q1),
+        ];
+        let (p, q) = keyframe_pose(&poses, 0.25);
+        assert!(close(&p, &Vector3::new(2.0, 0.0, 0.5), 1e-15));
+        assert!((q.angle() - PI / 4.0).abs() < 1e-15);
+        let (p, q) = keyframe_pose(&poses, 0.75);
+        assert!(close(&p, &Vector3::new(2.5, 0.0, 1.0), 1e-15));
+        assert!(q.angle_to(&q1) < 1e-15);
+        assert_eq!(keyframe_pose(&poses, 7.0).0, Vector3::new(3.0, 0.0, 1.0));
+        assert_eq!(keyframe_pose(&poses, 0.0).0, Vector3::new(2.0, 0.0, 0.0));
+    }
+
+    #[test]
+    fn fixed_bodies_follow_their_motion_and_keyframes() {
+        let mut scene = parse(
+            r#"
+duration_s = 1.0
+[settings]
+time_step_s = 0.05
+[[rigid_body]]
+name = "lift"
+box = { size_m = [0.2, 0.2, 0.2] }
+mass_kg = 1.0
+position_m = [0.3, 0.0, 0.0]
+motion = { velocity_m_s = [0.0, 0.0, 0.5], angular_velocity_deg_s = 90.0, axis = [0.0, 0.0, 1.0], center_m = [0.1, 0.0, 0.0] }
+[[rigid_body]]
+name = "arm"
+box = { size_m = [0.2, 0.2, 0.2] }
+mass_kg = 1.0
+position_m = [2.0, 0.0, 0.0]
+keyframes = [
+  { time_s = 0.5, position_m = [2.0, 0.0, 1.0], rotate_deg = { angle = 90.0, axis = [1.0, 0.0, 0.0] } },
+  { time_s = 1.0, position_m = [3.0, 0.0, 1.0] },
+]
+[[rigid_body]]
+name = "post"
+box = { size_m = [0.2, 0.2, 0.2] }
+mass_kg = 1.0
+position_m = [0.0, 3.0, 0.0]
+fixed = true
+"#,
+        );
+        let labels: Vec<_> = scene.joints.iter().map(|j| j.label.as_str()).collect();
+        assert_eq!(labels, ["lift.fixed", "arm.fixed", "post.fixed"]);
+        let lift = scene.rigid_body("lift").unwrap().body;
+        let arm = scene.rigid_body("arm").unwrap().body;
+        let post = scene.rigid_body("post").unwrap().body;
+        let fix = scene.joint("lift.fixed").unwrap().clone();
+        let sim = &mut scene.simulation;
+        for _ in 0..10 {
+            sim.step().unwrap();
+            let t = sim.time();
+            // The lift: turned by 90°·t about the vertical through (0.1, 0, 0), raised by 0.5·t.
+            let (s, c) = (90.0f64 * t).to_radians().sin_cos();
+            let expected = Vector3::new(0.1 + 0.2 * c, 0.2 * s, 0.5 * t);
+            let target = &sim.rigid_bodies.joints.potential.elements[fix.elements[0] as usize].nodes[0];
+            let Node::World(target) = *target else {
+                panic!("{target:?}")
+            };
+            assert!(close(&Vector3::from(target), &expected, 1e-14), "t = {t}: {target:?}");
+            assert!(close(&sim.body_position(lift), &expected, 1e-3), "t = {t}");
+            let turn = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), (90.0f64 * t).to_radians());
+            assert!(
+                sim.body_orientation(lift).angle_to(&turn) < 1f64.to_radians(),
+                "t = {t}"
+            );
+            // The arm: up by 2·t and turning about x until 0.5 s.
+            let z = (2.0 * t).min(1.0);
+            assert!(
+                close(&sim.body_position(arm), &Vector3::new(2.0, 0.0, z), 1e-3),
+                "t = {t}"
+            );
+            let turn = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), (180.0 * t).min(90.0).to_radians());
+            assert!(sim.body_orientation(arm).angle_to(&turn) < 1f64.to_radians(), "t = {t}");
+            assert!(close(&sim.body_position(post), &Vector3::new(0.0, 3.0, 0.0), 1e-3));
+        }
+        assert!((sim.time() - 0.5).abs() < 1e-12);
+        let state = sim.joint_state(&fix);
+        assert!(state.violation_m <= 1e-3, "{state:?}");
+    }
+
+    /// One body per joint type (or two), each joint to the world or to a second body.
+    const ALL_JOINTS: &str = r#"
+duration_s = 1.0
+[settings]
+gravity_m_s2 = [0.0, 0.0, 0.0]
+"#;
+
+    fn all_joints_scene() -> String {
+        let types = [
+            ("ball", "point_m = [P]"),
+            ("ball_cone", "point_m = [P]\naxis = [0.0, 0.0, 1.0]\nlimit_deg = 30.0"),
+            ("hinge", "point_m = [P]\naxis = [0.0, 1.0, 0.0]"),
+            ("hinge_limit", "point_m = [P]\naxis = [0.0, 1.0, 0.0]\nlimit_deg = 45.0"),
+            ("universal", "point_m = [P]\naxis_a = [1.0, 0.0, 0.0]\naxis_b = [0.0, 1.0, 0.0]"),
+            ("slider", "point_m = [P]\naxis = [0.0, 0.0, 1.0]"),
+            ("prismatic", "point_m = [P]\naxis = [0.0, 0.0, 1.0]"),
+            ("prismatic_press", "point_m = [P]\naxis = [0.0, 0.0, 1.0]\ntarget_velocity_m_s = 0.1\nmax_force_n = 10.0"),
+            ("motor", "point_m = [P]\naxis = [0.0, 1.0, 0.0]\nmax_torque_n_m = 1.0\ntarget_schedule = [[0.0, 0.0], [1.0, 90.0]]"),
+            ("hinge_servo", "point_m = [P]\naxis = [0.0, 1.0, 0.0]\ntarget_deg = 30.0\nmax_torque_n_m = 1.0\nresponse_time_s = 0.1"),
+            ("prismatic_servo", "point_m = [P]\naxis = [0.0, 0.0, 1.0]\ntarget_schedule = [[0.0, 0.0], [0.5, 0.1]]\nmax_force_n = 10.0"),
+            ("fix", ""),
+            ("attachment", "a = \"base\""),
+            ("distance", "point_a_m = [P]\npoint_b_m = [Q]"),
+            ("distance_limits", "point_a_m = [P]\npoint_b_m = [Q]\nmin_m = 0.05\nmax_m = 0.2"),
+            ("spring", "point_a_m = [P]\npoint_b_m = [Q]\nspring_stiffness_n_m = 100.0\ndamping_n_s_m = 1.0\nlimits_m = [0.05, 0.2]"),
+            ("direction", "axis = [0.0, 0.0, 1.0]"),
+            ("angle_limit", "axis = [0.0, 0.0, 1.0]\nlimit_deg = 10.0"),
+            ("point_on_axis", "point_m = [P]\naxis = [1.0, 0.0, 0.0]"),
+            ("linear_velocity", "point_m = [P]\naxis = [1.0, 0.0, 0.0]\ntarget_velocity_m_s = 0.2\nmax_force_n = 5.0\ndelay_m_s = 0.02"),
+            ("angular_velocity", "axis = [0.0, 0.0, 1.0]\ntarget_velocity_deg_s = 45.0\nmax_torque_n_m = 2.0\ndelay_deg_s = 1.0"),
+        ];
+        let mut s = ALL_JOINTS.to_string();
+        s += "[[rigid_body]]\nname = \"base\"\nbox = { size_m = [0.1, 0.1, 0.1] }\nmass_kg = 1.0\nposition_m = [0.0, -2.0, 0.0]\n";
+        for (i, (t, _)) in types.iter().enumerate() {
+            s += &format!(
+                "[[rigid_body]]\nname = \"{t}\"\nbox = {{ size_m = [0.1, 0.1, 0.1] }}\nmass_kg = 1.0\nposition_m = [{}.0, 0.0, 0.0]\n",
+                i
+            );
+        }
+        for (i, (t, fields)) in types.iter().enumerate() {
+            let p = format!("{i}.0, 0.0, 0.05");
+            let q = format!("{i}.0, 0.0, -0.05");
+            s += &format!(
+                "[[joint]]\ntype = \"{t}\"\nb = \"{t}\"\n{}\n",
+                fields
+                    .replace("[P]", &format!("[{p}]"))
+                    .replace("[Q]", &format!("[{q}]"))
+            );
+        }
+        s
+    }
+
+    #[test]
+    fn every_joint_type_is_built_registered_and_runs() {
+        let mut scene = parse(&all_joints_scene());
+        let names: Vec<_> = scene.joints.iter().map(|j| j.label.clone()).collect();
+        assert_eq!(names.len(), 21);
+        assert_eq!(names[0], "ball world-ball");
+        assert_eq!(names[12], "attachment base-attachment");
+        // The simulation knows the same joints, with all their elements.
+        let joints = scene.joints.clone();
+        let sim = &mut scene.simulation;
+        assert_eq!(sim.rigid_bodies.named_joints, joints);
+        let counts: Vec<_> = joints.iter().map(|j| j.elements.len()).collect();
+        assert_eq!(counts, [1, 2, 2, 3, 2, 2, 3, 4, 3, 3, 4, 3, 3, 1, 1, 2, 1, 1, 1, 1, 1]);
+        let elements = sim.rigid_bodies.joints.potential.elements.len();
+        assert_eq!(elements, counts.iter().sum::<usize>());
+        // Parameters arrive in SI units.
+        let driver = |sim: &Simulation, name: &str| {
+            let h = joints.iter().find(|j| j.label == name).unwrap();
+            sim.rigid_bodies.joints.potential.elements[h.driver.unwrap() as usize].clone()
+        };
+        match driver(sim, "angular_velocity world-angular_velocity").primitive {
+            Primitive::AngularVelocity {
+                target_rad_s,
+                max_torque_n_m,
+                delay_rad_s,
+            } => {
+                assert_eq!(target_rad_s, 45f64.to_radians());
+                assert_eq!(max_torque_n_m, 2.0);
+                assert_eq!(delay_rad_s, 1f64.to_radians());
+            }
+            other => panic!("{other:?}"),
+        }
+        let servo = driver(sim, "hinge_servo world-hinge_servo").servo.unwrap();
+        assert_eq!((servo.target, servo.response_time_s), (30f64.to_radians(), 0.1));
+        let spring = driver(sim, "spring world-spring");
+        assert_eq!(spring.stiffness, 100.0);
+        // Schedules set the targets before each step.
+        for _ in 0..3 {
+            sim.step().unwrap();
+        }
+        let t = sim.time();
+        match driver(sim, "motor world-motor").primitive {
+            Primitive::AngularVelocity { target_rad_s, .. } => {
+                assert!((target_rad_s - (90.0 * t).to_radians()).abs() < 1e-12, "{target_rad_s}")
+            }
+            other => panic!("{other:?}"),
+        }
+        let servo = driver(sim, "prismatic_servo world-prismatic_servo").servo.unwrap();
+        assert!((servo.target - 0.2 * t).abs() < 1e-12);
+        // Every joint has a state; the hinge angle is measured.
+        let states = sim.joint_states();
+        assert_eq!(states.len(), 21);
+        assert!(states[2].1.coordinate.is_some());
+    }
+
+    #[test]
+    fn joint_names_default_and_must_be_unique() {
+        let base = "duration_s = 1.0\n[[rigid_body]]\nname = \"a\"\nsphere = { radius_m = 0.1 }\nmass_kg = 1.0\n\
+                    [[rigid_body]]\nname = \"b\"\nsphere = { radius_m = 0.1 }\nmass_kg = 1.0\nposition_m = [0.0, 0.0, -0.5]\n";
+        let ball = "[[joint]]\ntype = \"ball\"\na = \"a\"\nb = \"b\"\npoint_m = [0.0, 0.0, 0.0]\n";
+        let scene = parse(&format!("{base}{ball}{ball}"));
+        let names: Vec<_> = scene.joints.iter().map(|j| j.label.as_str()).collect();
+        assert_eq!(names, ["ball a-b", "ball a-b #2"]);
+        // `enabled = false` creates it switched off.
+        let off = parse(&format!("{base}{ball}enabled = false\n"));
+        let h = &off.joints[0];
+        let elements = &off.simulation.rigid_bodies.joints.potential.elements;
+        assert!(h.elements.iter().all(|&e| !elements[e as usize].enabled));
+        let named = format!("{base}{ball}name = \"j\"\n{ball}name = \"j\"\n");
+        let e = parse_err(&named).to_string();
+        assert!(
+            e.contains("test.toml:22:1: duplicate joint name 'j' in joint 'j' name"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn rigid_bodies_take_part_in_friction_collisions_and_attachments() {
+        let text = r#"
+duration_s = 1.0
+[settings]
+contact.default_thickness_m = 0.001
+[[surface]]
+name = "flag"
+vertices_m = [[0.05, 0.05, 0.6], [0.05, 1.05, 0.6], [0.05, 0.05, 1.6]]
+elements = [[0, 1, 2]]
+material = "cotton_fabric"
+[[rigid_body]]
+name = "pole"
+box = { size_m = [0.1, 0.1, 0.2] }
+mass_kg = 1.0
+position_m = [0.0, 0.0, 0.5]
+fixed = true
+[[rigid_body]]
+name = "ghost"
+sphere = { radius_m = 0.1 }
+mass_kg = 1.0
+position_m = [3.0, 0.0, 0.0]
+contact = false
+[[friction]]
+objects = ["flag", "pole"]
+mu = 0.4
+[[disable_collision]]
+objects = ["flag", "pole"]
+[[attachment]]
+a = "flag"
+b = "pole"
+within_m = 1e-9
+stiffness = 1e5
+"#;
+        let mut scene = parse(text);
+        let pole = scene.rigid_body("pole").unwrap();
+        let flag = scene.object("flag").unwrap().contact().unwrap();
+        let sim = &mut scene.simulation;
+        assert_eq!(sim.contact.friction(flag, pole.contact.unwrap()).unwrap(), 0.4);
+        // The flag's corner touches the pole's top corner: only without the collision is that
+        // a valid start.
+        let (att_label, att) = scene.attachments[0].clone();
+        assert_eq!(att_label, "flag-pole");
+        for _ in 0..5 {
+            sim.step().unwrap();
+        }
+        // The corner hangs on the pole while the rest of the flag falls.
+        let gap = sim.deformables.attachments.max_gap_m(att, &sim.nodes.x).unwrap();
+        assert!(gap < 1e-3, "{gap}");
+        let flag_x = sim.positions(scene.objects[0].1.nodes()).to_vec();
+        assert!(close(&flag_x[0], &Vector3::new(0.05, 0.05, 0.6), 1e-3), "{}", flag_x[0]);
+        assert!(flag_x[1].z < 0.5, "{}", flag_x[1]);
+        // A body without contact cannot have friction.
+        let bad = text.replace(
+            "objects = [\"flag\", \"pole\"]\nmu",
+            "objects = [\"flag\", \"ghost\"]\nmu",
+        );
+        let e = parse_err(&bad).to_string();
+        assert!(
+            e.contains("test.toml:23:20: rigid body 'ghost' takes no part in contact: it has no contact thickness or `contact = false`"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn errors_name_file_line_and_field() {
+        const BODY: &str =
+            "duration_s = 1.0\n[[rigid_body]]\nname = \"link\"\nbox = { size_m = [0.1, 0.1, 0.1] }\nmass_kg = 1.0\n";
+        const BODIES: &str = "duration_s = 1.0\n\
+                              [[rigid_body]]\nname = \"a\"\nbox = { size_m = [0.1, 0.1, 0.1] }\nmass_kg = 1.0\n\
+                              [[rigid_body]]\nname = \"b\"\nbox = { size_m = [0.1, 0.1, 0.1] }\nmass_kg = 1.0\nposition_m = [0.0, 0.0, -0.2]\n\
+                              [[surface]]\nname = \"cloth\"\ngrid = { size_m = [1.0, 1.0], quads = [1, 1] }\nmaterial = \"cotton_fabric\"\n";
+        // Line 15 is the `[[joint]]` header, line 16 its `type`, 17 `a`, 18 `b`, 19 `point_m`.
+        let hinge = "[[joint]]\ntype = \"hinge\"\na = \"a\"\nb = \"b\"\npoint_m = [0.0, 0.0, -0.1]\n";
+        let cases: Vec<(&str, String, Vec<&str>)> = vec![
+            (
+                "unknown field in a body",
+                format!("{BODY}colour = \"red\"\n"),
+                vec!["test.toml:6:1: unknown field `colour` in rigid_body 'link', expected one of"],
+            ),
+            (
+                "no mass",
+                "duration_s = 1.0\n[[rigid_body]]\nname = \"link\"\nbox = { size_m = [0.1, 0.1, 0.1] }\n".into(),
+                vec!["test.toml:2:", "rigid body 'link' needs a mass: give `mass_kg` or `density_kg_m3` in rigid_body 'link'"],
+            ),
+            (
+                "two masses",
+                format!("{BODY}density_kg_m3 = 10.0\n"),
+                vec!["=test.toml:6:1: give the mass once: `mass_kg` or `density_kg_m3` in rigid_body 'link' density_kg_m3"],
+            ),
+            (
+                "negative mass",
+                "duration_s = 1.0\n[[rigid_body]]\nname = \"link\"\nbox = { size_m = [0.1, 0.1, 0.1] }\nmass_kg = -1.0\n".into(),
+                vec!["=test.toml:5:1: mass_kg = -1 must be positive and finite (kg) in rigid_body 'link' mass_kg"],
+            ),
+            (
+                "no shape",
+                "duration_s = 1.0\n[[rigid_body]]\nname = \"link\"\nmass_kg = 1.0\n".into(),
+                vec!["test.toml:2:", "no geometry: give one of `box`, `sphere`, `cylinder`, `torus`, `mesh` or `vertices_m` + `triangles`"],
+            ),
+            (
+                "scale of a primitive",
+                format!("{BODY}scale = 2.0\n"),
+                vec!["test.toml:6:1: `scale` applies to `mesh` and inline geometry; give the box's size instead"],
+            ),
+            (
+                "two orientations",
+                format!("{BODY}rotate_deg = {{ angle = 90.0, axis = [0.0, 0.0, 1.0] }}\nquaternion_wxyz = [1.0, 0.0, 0.0, 0.0]\n"),
+                vec!["test.toml:7:1: give the orientation once", "rigid_body 'link' quaternion_wxyz"],
+            ),
+            (
+                "zero quaternion",
+                format!("{BODY}quaternion_wxyz = [0.0, 0.0, 0.0, 0.0]\n"),
+                vec!["test.toml:6:1: quaternion_wxyz = [0.0, 0.0, 0.0, 0.0] must be finite and non-zero"],
+            ),
+            (
+                "bad inertia",
+                format!("{BODY}inertia_kg_m2 = [[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0]]\n"),
+                vec!["test.toml:6:1:", "must be symmetric positive definite", "rigid_body 'link' inertia_kg_m2"],
+            ),
+            (
+                "open mesh without inertia",
+                "duration_s = 1.0\n[[rigid_body]]\nname = \"plate\"\nvertices_m = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]\ntriangles = [[0, 1, 2]]\nmass_kg = 1.0\n".into(),
+                vec!["test.toml:4:1:", "it must be closed and oriented outward (give `mass_kg` and `inertia_kg_m2` for an open mesh) in rigid_body 'plate' vertices_m"],
+            ),
+            (
+                "bad torus",
+                "duration_s = 1.0\n[[rigid_body]]\nname = \"ring\"\ntorus = { major_radius_m = 0.1, minor_radius_m = 0.2 }\nmass_kg = 1.0\n".into(),
+                vec!["test.toml:4:", "minor_radius_m = 0.2 must be smaller than major_radius_m = 0.1", "rigid_body 'ring' torus.minor_radius_m"],
+            ),
+            (
+                "contact without thickness",
+                format!("{BODY}contact = true\n"),
+                vec!["test.toml:6:1: rigid body 'link' takes part in contact but has no contact thickness"],
+            ),
+            (
+                "motion of a body that is not fixed",
+                format!("{BODY}fixed = false\nmotion = {{ velocity_m_s = [0.0, 0.0, 1.0] }}\n"),
+                vec!["test.toml:7:1: a scripted `motion` drives a fixed body: remove `fixed = false` in rigid_body 'link' motion"],
+            ),
+            (
+                "motion without axis",
+                format!("{BODY}motion = {{ angular_velocity_deg_s = 90.0 }}\n"),
+                vec!["test.toml:6:12:", "needs an `axis`", "rigid_body 'link' motion.angular_velocity_deg_s"],
+            ),
+            (
+                "keyframes out of order",
+                format!("{BODY}keyframes = [{{ time_s = 1.0 }}, {{ time_s = 0.5 }}]\n"),
+                vec!["test.toml:6:", "time_s = 0.5 must be finite and after the previous keyframe (1 s", "rigid_body 'link' keyframes[1].time_s"],
+            ),
+            (
+                "body called world",
+                "duration_s = 1.0\n[[rigid_body]]\nname = \"world\"\nbox = { size_m = [0.1, 0.1, 0.1] }\nmass_kg = 1.0\n".into(),
+                vec!["test.toml:3:1: 'world' names the fixed world in joints"],
+            ),
+            (
+                "prescribed rigid body",
+                format!("{BODY}[[prescribed]]\nobject = \"link\"\nall = true\n"),
+                vec!["test.toml:7:1: 'link' is a rigid body: hold it with `fixed = true`", "prescribed #1 (object 'link') object"],
+            ),
+            (
+                "bad joint type",
+                format!("{BODIES}[[joint]]\ntype = \"hing\"\nb = \"b\"\n"),
+                vec!["test.toml:16:8: unknown variant `hing` in joint #1 (hing 'world' to 'b') type, expected one of `ball`, `ball_cone`, `hinge`"],
+            ),
+            (
+                "missing axis",
+                format!("{BODIES}{hinge}"),
+                vec!["=test.toml:16:1: a hinge joint needs `axis` (it takes `point_m`, `axis`) in joint #1 (hinge 'a' to 'b') type"],
+            ),
+            (
+                "unknown body label",
+                format!("{BODIES}{}axis = [0.0, 1.0, 0.0]\n", hinge.replace("a = \"a\"", "a = \"c\"")),
+                vec!["=test.toml:17:1: unknown rigid body 'c' in joint #1 (hinge 'c' to 'b') a, expected one of world, a, b"],
+            ),
+            (
+                "a deformable object in a joint",
+                format!("{BODIES}{}axis = [0.0, 1.0, 0.0]\n", hinge.replace("b = \"b\"", "b = \"cloth\"")),
+                vec!["test.toml:18:1: 'cloth' is a surface, not a rigid body", "in joint #1 (hinge 'a' to 'cloth') b, expected one of world, a, b"],
+            ),
+            (
+                "the world as b",
+                format!("{BODIES}{}axis = [0.0, 1.0, 0.0]\n", hinge.replace("b = \"b\"", "b = \"world\"")),
+                vec!["test.toml:18:1: `b` must be a rigid body"],
+            ),
+            (
+                "a field of another joint type",
+                format!("{BODIES}{hinge}axis = [0.0, 1.0, 0.0]\nlimit_deg = 30.0\n"),
+                vec!["test.toml:21:1: `limit_deg` does not apply to a hinge joint, which takes `point_m`, `axis`, `stiffness`"],
+            ),
+            (
+                "zero axis",
+                format!("{BODIES}{hinge}axis = [0.0, 0.0, 0.0]\n"),
+                vec!["=test.toml:20:1: axis = [0.0, 0.0, 0.0] must be finite and non-zero in joint #1 (hinge 'a' to 'b') axis"],
+            ),
+            (
+                "bad joint stiffness",
+                format!("{BODIES}{hinge}axis = [0.0, 1.0, 0.0]\nstiffness = -1.0\n"),
+                vec!["test.toml:21:1:", "`stiffness` = -1", "joint #1 (hinge 'a' to 'b') stiffness"],
+            ),
+            (
+                "bad cone limit",
+                format!("{BODIES}{}axis = [0.0, 0.0, 1.0]\nlimit_deg = 200.0\n", hinge.replace("hinge", "ball_cone")),
+                vec!["test.toml:21:1:", "`limit_deg` = 200", "in joint #1 (ball_cone 'a' to 'b') limit_deg"],
+            ),
+            (
+                "motor without target",
+                format!("{BODIES}{}axis = [0.0, 1.0, 0.0]\nmax_torque_n_m = 1.0\n", hinge.replace("hinge", "motor")),
+                vec!["test.toml:16:1: a motor joint needs `target_velocity_deg_s` or a `target_schedule`"],
+            ),
+            (
+                "motor with negative torque",
+                format!("{BODIES}{}axis = [0.0, 1.0, 0.0]\nmax_torque_n_m = -1.0\ntarget_velocity_deg_s = 10.0\n", hinge.replace("hinge", "motor")),
+                vec!["test.toml:21:1:", "in joint #1 (motor 'a' to 'b') max_torque_n_m"],
+            ),
+            (
+                "schedule out of order",
+                format!("{BODIES}{}axis = [0.0, 1.0, 0.0]\nmax_torque_n_m = 1.0\ntarget_schedule = [[1.0, 0.0], [0.5, 1.0]]\n", hinge.replace("hinge", "motor")),
+                vec!["test.toml:22:", "needs finite values and times that increase", "joint #1 (motor 'a' to 'b') target_schedule[1]"],
+            ),
+            (
+                "universal axes not perpendicular",
+                format!("{BODIES}{}axis_a = [1.0, 0.0, 0.0]\naxis_b = [1.0, 1.0, 0.0]\n", hinge.replace("hinge", "universal")),
+                vec!["test.toml:21:1: axis_b = [1.0, 1.0, 0.0] must be perpendicular to axis_a"],
+            ),
+            (
+                "fix joint with a body a",
+                format!("{BODIES}[[joint]]\ntype = \"fix\"\na = \"a\"\nb = \"b\"\n"),
+                vec!["test.toml:17:1: a fix joint holds body b in the world"],
+            ),
+            (
+                "distance limits around the wrong distance",
+                format!("{BODIES}[[joint]]\ntype = \"distance_limits\"\na = \"a\"\nb = \"b\"\npoint_a_m = [0.0, 0.0, 0.0]\npoint_b_m = [0.0, 0.0, -0.2]\nmin_m = 0.5\nmax_m = 1.0\n"),
+                vec!["test.toml:21:1:", "current distance", "joint #1 (distance_limits 'a' to 'b') min_m"],
+            ),
+            (
+                "a joint between a body and itself",
+                format!("{BODIES}{}axis = [0.0, 1.0, 0.0]\n", hinge.replace("a = \"a\"", "a = \"b\"")),
+                vec!["test.toml:18:1: the joint connects 'b' to itself"],
+            ),
+            (
+                "unknown field in a joint",
+                format!("{BODIES}{hinge}axis = [0.0, 1.0, 0.0]\nspeed = 1.0\n"),
+                vec!["test.toml:21:1: unknown field `speed` in joint #1 (hinge 'a' to 'b'), expected one of"],
+            ),
+        ];
+        let mut failures = Vec::new();
+        for (what, text, expected) in cases {
+            let e = parse_err(&text);
+            let shown = e.to_string();
+            for s in expected {
+                let ok = match s.strip_prefix('=') {
+                    Some(whole) => shown == whole,
+                    None => shown.contains(s),
+                };
+                if !ok {
+                    failures.push(format!("{what}: `{shown}` does not contain `{s}`"));
+                }
+            }
+            if e.file != "test.toml" || e.line.is_none() {
+                failures.push(format!("{what}: no file or line in {e:?}"));
+            }
+        }
+        assert!(failures.is_empty(), "{}", failures.join("\n"));
+    }
+
+    #[test]
+    fn json_rigid_scenes_parse() {
+        let json = r#"{
+  "duration_s": 1.0,
+  "rigid_body": [
+    { "name": "a", "box": { "size_m": [0.1, 0.1, 0.1] }, "mass_kg": 1.0, "fixed": true },
+    { "name": "b", "sphere": { "radius_m": 0.05 }, "mass_kg": 0.5, "position_m": [0.0, 0.0, -0.3] }
+  ],
+  "joint": [ { "name": "rod", "type": "distance", "a": "a", "b": "b", "point_a_m": [0.0, 0.0, 0.0], "point_b_m": [0.0, 0.0, -0.3] } ]
+}"#;
+        let scene = parse_scene_with(json, "scene.json", Path::new("."), quiet).unwrap();
+        assert_eq!(scene.simulation.num_rigid_bodies(), 2);
+        let names: Vec<_> = scene.joints.iter().map(|j| j.label.as_str()).collect();
+        assert_eq!(names, ["a.fixed", "rod"]);
+        let bad = json.replace("\"distance\"", "\"distanc\"");
+        let Err(StarkError::SceneFile(e)) = parse_scene(&bad, "scene.json", Path::new(".")) else {
+            panic!("parsed")
+        };
+        assert_eq!(e.line, Some(7), "{e}");
+        assert!(e.to_string().contains("unknown variant `distanc`"), "{e}");
+    }
+
+    /// `scenes/rb_pendulum_chain.toml` built with the Rust API.
+    fn pendulum_chain_in_rust(settings: Settings) -> Simulation {
+        let mut sim = Simulation::new(settings).unwrap();
+        let size = Vector3::new(0.2, 0.03, 0.03);
+        let link = meshes::box_mesh(size);
+        let mut links = Vec::new();
+        for i in 0..5 {
+            let b = sim
+                .add_rigid_body_with(
+                    &format!("link{i}"),
+                    &MassProperties::cuboid(0.2, size),
+                    Vector3::new([0.1, 0.3, 0.5, 0.7, 0.9][i], 0.0, 0.0),
+                    UnitQuaternion::identity(),
+                )
+                .unwrap();
+            sim.add_rigid_output_mesh(b, &link.vertices, &link.elements).unwrap();
+            links.push(b);
+        }
+        let (r, h) = (0.15, 0.02);
+        let disc = meshes::cylinder_mesh(r, h, 24, 1);
+        let q = UnitQuaternion::from_axis_angle(&Unit::new_normalize(Vector3::x()), 90f64.to_radians());
+        let wheel = sim
+            .add_rigid_body_with(
+                "wheel",
+                &MassProperties::cylinder(1000.0 * (PI * r * r * h), r, h),
+                Vector3::new(0.0, 0.5, 0.0),
+                q,
+            )
+            .unwrap();
+        sim.add_rigid_output_mesh(wheel, &disc.vertices, &disc.elements)
+            .unwrap();
+        let p = JointParams::default();
+        sim.add_hinge_joint("pivot", None, links[0], Vector3::zeros(), Vector3::y(), p)
+            .unwrap();
+        for i in 1..5 {
+            let at = Vector3::new([0.2, 0.4, 0.6, 0.8][i - 1], 0.0, 0.0);
+            sim.add_hinge_joint(&format!("hinge{i}"), Some(links[i - 1]), links[i], at, Vector3::y(), p)
+                .unwrap();
+        }
+        sim.add_motor(
+            "motor",
+            None,
+            wheel,
+            Vector3::new(0.0, 0.5, 0.0),
+            Vector3::y(),
+            90f64.to_radians(),
+            1.0,
+            DEFAULT_CONTROLLER_DELAY,
+            p,
+        )
+        .unwrap();
+        sim
+    }
+
+    #[test]
+    fn pendulum_chain_scene_matches_the_same_scene_built_in_rust() {
+        let scene = load_scene_with(&repo_scene("rb_pendulum_chain.toml"), quiet).unwrap();
+        assert_eq!((scene.name.as_str(), scene.duration_s), ("rb_pendulum_chain", 3.0));
+        let mut from_file = scene.simulation;
+        let mut settings = from_file.settings.clone();
+        quiet(&mut settings);
+        let mut in_rust = pendulum_chain_in_rust(settings);
+        assert_eq!(from_file.bodies.mass, in_rust.bodies.mass);
+        assert_eq!(from_file.bodies.inertia_local, in_rust.bodies.inertia_local);
+        assert_eq!(body_bits(&from_file), body_bits(&in_rust));
+        assert_eq!(bits(&from_file.nodes.x), bits(&in_rust.nodes.x));
+        assert_eq!(from_file.rigid_bodies.named_joints, in_rust.rigid_bodies.named_joints);
+        assert!(from_file.contact.objects().is_empty());
+        for _ in 0..4 {
+            from_file.step().unwrap();
+            in_rust.step().unwrap();
+        }
+        assert!(
+            in_rust.body_position(RigidBodyHandle { index: 4 }).z < -1e-3,
+            "nothing moved"
+        );
+        assert_eq!(body_bits(&from_file), body_bits(&in_rust));
+        assert_eq!(bits(&from_file.nodes.x), bits(&in_rust.nodes.x));
+        assert_eq!(from_file.joint_states(), in_rust.joint_states());
+    }
+
+    /// `scenes/rb_box_on_cloth.toml` built with the Rust API.
+    fn box_on_cloth_in_rust(settings: Settings) -> Simulation {
+        use crate::deformables::PrescribedParams;
+        use crate::presets::SurfaceMaterial;
+        let mut sim = Simulation::new(settings).unwrap();
+        let grid = meshes::triangle_grid([0.0, 0.0], [1.0, 1.0], [20, 20], 0.0);
+        let material = SurfaceMaterial {
+            contact_thickness_m: Some(0.002),
+            ..SurfaceMaterial::cotton_fabric()
+        };
+        let cloth = sim
+            .add_surface("cloth", &grid.vertices, &grid.elements, &material)
+            .unwrap();
+        let size = Vector3::repeat(0.15);
+        let cube = meshes::box_mesh(size);
+        let q = UnitQuaternion::from_axis_angle(&Unit::new_normalize(Vector3::new(1.0, 1.0, 0.0)), 30f64.to_radians());
+        let body = sim
+            .add_rigid_body_with(
+                "box",
+                &MassProperties::cuboid(0.5, size),
+                Vector3::new(0.1, 0.0, 0.2),
+                q,
+            )
+            .unwrap();
+        let box_mesh = sim
+            .add_rigid_collision_mesh(body, &cube.vertices, &cube.elements, Some(0.002))
+            .unwrap();
+        let paddle_size = Vector3::new(0.1, 0.4, 0.02);
+        let plate = meshes::box_mesh(paddle_size);
+        let start = Vector3::new(-0.3, 0.0, -0.15);
+        let paddle = sim
+            .add_rigid_body_with(
+                "paddle",
+                &MassProperties::cuboid(1.0, paddle_size),
+                start,
+                UnitQuaternion::identity(),
+            )
+            .unwrap();
+        let paddle_mesh = sim
+            .add_rigid_collision_mesh(paddle, &plate.vertices, &plate.elements, Some(0.002))
+            .unwrap();
+        let fix = sim
+            .add_fix_joint("paddle.fixed", paddle, JointParams::default())
+            .unwrap();
+        let tilt = UnitQuaternion::from_axis_angle(&Unit::new_normalize(Vector3::y()), 20f64.to_radians());
+        let poses: Poses = vec![
+            (0.0, start, UnitQuaternion::identity()),
+            (1.0, start, UnitQuaternion::identity()),
+            (1.5, Vector3::new(-0.25, 0.0, -0.05), tilt),
+            (2.0, Vector3::new(-0.2, 0.0, -0.1), tilt),
+        ];
+        sim.add_time_event(0.0, f64::INFINITY, move |sim, t| {
+            let (p, q) = keyframe_pose(&poses, t);
+            sim.set_fixed_transform(&fix, p, q)
+        });
+        let c = cloth.contact.unwrap();
+        sim.contact.set_friction(c, box_mesh.contact, 0.5).unwrap();
+        sim.contact.set_friction(c, paddle_mesh.contact, 0.3).unwrap();
+        let pin = PrescribedParams {
+            stiffness: 1e6,
+            ..Default::default()
+        };
+        for x in [-0.5, 0.5] {
+            for y in [-0.5, 0.5] {
+                sim.deformables
+                    .prescribed
+                    .add_in_box(
+                        &sim.nodes,
+                        cloth.nodes,
+                        "cloth",
+                        Vector3::new(x, y, 0.0),
+                        Vector3::repeat(0.001),
+                        true,
+                        pin.clone(),
+                    )
+                    .unwrap();
+            }
+        }
+        sim
+    }
+
+    #[test]
+    fn box_on_cloth_scene_matches_the_same_scene_built_in_rust() {
+        let scene = load_scene_with(&repo_scene("rb_box_on_cloth.toml"), quiet).unwrap();
+        let mut from_file = scene.simulation;
+        let mut in_rust = box_on_cloth_in_rust(from_file.settings.clone());
+        assert_eq!(from_file.settings, in_rust.settings);
+        assert_eq!(body_bits(&from_file), body_bits(&in_rust));
+        assert_eq!(bits(&from_file.nodes.x), bits(&in_rust.nodes.x));
+        let describe = |c: &crate::contact::Contact| -> Vec<(String, f64, u32, u32)> {
+            c.objects()
+                .iter()
+                .map(|o| (o.label.clone(), o.thickness_m, o.nodes.first, o.nodes.len))
+                .collect()
+        };
+        assert_eq!(describe(&from_file.contact), describe(&in_rust.contact));
+        for _ in 0..3 {
+            from_file.step().unwrap();
+            in_rust.step().unwrap();
+        }
+        assert!(
+            in_rust.body_position(RigidBodyHandle { index: 0 }).z < 0.2 - 1e-3,
+            "nothing moved"
+        );
+        assert_eq!(body_bits(&from_file), body_bits(&in_rust));
+        assert_eq!(bits(&from_file.nodes.x), bits(&in_rust.nodes.x));
+    }
+}
