@@ -46,6 +46,10 @@ enum Command {
         /// No progress bar.
         #[arg(long)]
         quiet: bool,
+        /// After every step, check independently that no contact edge crosses a contact triangle
+        /// and count inverted tetrahedra; the run fails at the first intersection.
+        #[arg(long)]
+        check: bool,
     },
     /// List the built-in scenes.
     List,
@@ -71,7 +75,40 @@ fn base_settings(out: PathBuf, threads: usize, frames: bool) -> Settings {
     s
 }
 
-fn run_with_progress(sim: &mut Simulation, duration: f64, quiet: bool) -> stark::Result<RunSummary> {
+/// What `--check` saw over a run.
+#[derive(Default)]
+struct CheckReport {
+    /// States checked: the initial one and the one after each step.
+    steps_checked: u64,
+    most_inverted_tets: usize,
+    steps_with_inverted_tets: u64,
+}
+
+/// The independent per-step check of `stark run --check`: an exact edge–triangle intersection
+/// test over all contact surfaces (not the solver's CCD) and the sign of every tet's volume.
+fn check_step(sim: &Simulation, report: &mut CheckReport) -> stark::Result<()> {
+    let crossings = sim.contact.find_intersections(&sim.nodes.x);
+    if !crossings.is_empty() {
+        return Err(stark::StarkError::InvalidInput(format!(
+            "--check: {} intersection(s) at t = {:.6} s, e.g. {}",
+            crossings.len(),
+            sim.time(),
+            crossings[..crossings.len().min(3)].join("; ")
+        )));
+    }
+    let inverted = sim.deformables.tets.potential.count_inverted(&sim.nodes.x);
+    report.steps_checked += 1;
+    report.most_inverted_tets = report.most_inverted_tets.max(inverted);
+    report.steps_with_inverted_tets += u64::from(inverted > 0);
+    Ok(())
+}
+
+fn run_with_progress(
+    sim: &mut Simulation,
+    duration: f64,
+    quiet: bool,
+    mut check: Option<&mut CheckReport>,
+) -> stark::Result<RunSummary> {
     let bar = if quiet {
         ProgressBar::hidden()
     } else {
@@ -90,7 +127,10 @@ fn run_with_progress(sim: &mut Simulation, duration: f64, quiet: bool) -> stark:
             "step {} · {:.2} Newton/step",
             sum.steps, sum.newton_iterations_per_step
         ));
-        Ok(())
+        match check.as_deref_mut() {
+            Some(report) => check_step(s, report),
+            None => Ok(()),
+        }
     });
     bar.finish_and_clear();
     result
@@ -218,6 +258,7 @@ fn run(
     threads: usize,
     frames: bool,
     quiet: bool,
+    check: bool,
 ) -> stark::Result<()> {
     let settings = base_settings(out.clone(), threads, frames);
     let (mut sim, scene_duration) = match (scene_file, scene) {
@@ -240,8 +281,20 @@ fn run(
             "--duration must be positive, got {duration}"
         )));
     }
-    let summary = run_with_progress(&mut sim, duration, quiet)?;
+    let mut check_report = CheckReport::default();
+    let summary = run_with_progress(&mut sim, duration, quiet, check.then_some(&mut check_report))?;
+    if check {
+        // The callback runs before each step; this checks the state after the last one.
+        check_step(&sim, &mut check_report)?;
+    }
     print_summary(&summary, &out);
+    if check {
+        println!(
+            "check                 no intersection in any of {} states (the initial one and after each step); \
+             inverted tets: {} at most, in {} states",
+            check_report.steps_checked, check_report.most_inverted_tets, check_report.steps_with_inverted_tets
+        );
+    }
     print_logs(&sim);
     print_rigid_summary(&sim, &summary);
     if let Some(path) = summary_json {
@@ -358,6 +411,7 @@ fn main() -> ExitCode {
             threads,
             no_frames,
             quiet,
+            check,
         } => run(
             scene_file,
             scene,
@@ -367,6 +421,7 @@ fn main() -> ExitCode {
             threads,
             !no_frames,
             quiet,
+            check,
         ),
         Command::List => {
             for s in builtin_scenes() {

@@ -120,8 +120,12 @@ class OutputSettings:
     frames: bool
     """Write VTK frames (default: True)."""
     step_log: bool
-    """Write the per-step log `<name>.steps.jsonl` (default: True)."""
-    def __new__(cls, *, directory: Union[str, os.PathLike[str]] = ..., fps: float = ..., frames: bool = ..., step_log: bool = ...) -> OutputSettings:
+    """Write the per-step log `<name>.steps.jsonl`; False also turns off the body and joint logs (default: True)."""
+    bodies_log: bool
+    """Write `<name>.bodies.jsonl` (every rigid body's pose and velocities per step) when there are rigid bodies (default: True)."""
+    joints_log: bool
+    """Write `<name>.joints.jsonl` (every joint's state per step) when there are joints (default: True)."""
+    def __new__(cls, *, directory: Union[str, os.PathLike[str]] = ..., fps: float = ..., frames: bool = ..., step_log: bool = ..., bodies_log: bool = ..., joints_log: bool = ...) -> OutputSettings:
         """Defaults of the library, with the given fields replaced."""
     def to_dict(self) -> dict[str, Any]:
         """The fields as a plain dict (nested settings as nested dicts)."""
