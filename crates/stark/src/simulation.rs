@@ -358,31 +358,34 @@ impl Simulation {
                     gravity,
                 };
                 let mut terms = self.terms_mut();
-                // Lagged quantities are taken at the start of the step (v = 0, x = x0).
-                {
-                    let zeros = vec![Vector3::zeros(); dof_blocks(&nodes, &bodies)];
-                    let rest_poses: Vec<BodyPose> = (0..bodies.len())
-                        .map(|b| BodyPose::at_rest(bodies.position[b], &bodies.orientation[b], dt))
-                        .collect();
-                    let state = EvalState {
-                        dt,
-                        time: t_end,
-                        gravity,
-                        nodes: &nodes,
-                        v: &zeros,
-                        x: &nodes.x,
-                        bodies: &bodies,
-                        poses: &rest_poses,
-                    };
-                    for t in terms.iter_mut() {
-                        t.before_step(&state);
+                // Everything parallel in the step (lagged quantities, contact detection, the
+                // solve) runs in the simulation's pool, so `threads` bounds it.
+                let mut step = || {
+                    // Lagged quantities are taken at the start of the step (v = 0, x = x0).
+                    {
+                        let zeros = vec![Vector3::zeros(); dof_blocks(&nodes, &bodies)];
+                        let rest_poses: Vec<BodyPose> = (0..bodies.len())
+                            .map(|b| BodyPose::at_rest(bodies.position[b], &bodies.orientation[b], dt))
+                            .collect();
+                        let state = EvalState {
+                            dt,
+                            time: t_end,
+                            gravity,
+                            nodes: &nodes,
+                            v: &zeros,
+                            x: &nodes.x,
+                            bodies: &bodies,
+                            poses: &rest_poses,
+                        };
+                        for t in terms.iter_mut() {
+                            t.before_step(&state);
+                        }
                     }
-                }
-                let mut solve =
-                    || newton::solve(&mut newton_ws, &mut terms, &problem, &mut velocities, &newton_settings);
+                    newton::solve(&mut newton_ws, &mut terms, &problem, &mut velocities, &newton_settings)
+                };
                 match &pool {
-                    Some(p) => p.install(solve),
-                    None => solve(),
+                    Some(p) => p.install(step),
+                    None => step(),
                 }
             };
             self.nodes = nodes;
