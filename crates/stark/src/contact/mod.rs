@@ -397,6 +397,12 @@ impl Contact {
         Ok(())
     }
 
+    /// Whether two objects (`a == b`: an object with itself) collide.
+    pub fn collision_enabled(&self, a: ContactHandle, b: ContactHandle) -> Result<bool> {
+        let (i, j) = (self.check(a)?, self.check(b)?);
+        Ok(self.enabled[i * self.objects.len() + j])
+    }
+
     /// Switch collisions between two objects off (the original's `disable_collision`).
     pub fn disable_collision(&mut self, a: ContactHandle, b: ContactHandle) -> Result<()> {
         self.set_collision(a, b, false)

@@ -64,6 +64,8 @@ pub struct RigidBodies {
     /// Every joint made by the `Simulation::add_*` joint constructors, in creation order (the
     /// joint log writes their states).
     pub named_joints: Vec<joints::JointHandle>,
+    /// The contact objects of each body's collision meshes.
+    pub collision_meshes: Vec<Vec<ContactHandle>>,
 }
 
 impl Default for RigidBodies {
@@ -74,6 +76,7 @@ impl Default for RigidBodies {
             joints: joints::Joints::new(joints::JointSet::default()),
             attachments: crate::energy::PotentialTerm::new(attachments::RigidAttachmentSet::default()),
             named_joints: Vec::new(),
+            collision_meshes: Vec::new(),
         }
     }
 }
@@ -164,6 +167,7 @@ impl Simulation {
         b.acceleration.push(Vector3::zeros());
         b.angular_acceleration.push(Vector3::zeros());
         self.rigid_bodies.labels.push(label.to_string());
+        self.rigid_bodies.collision_meshes.push(Vec::new());
         self.rigid_bodies.inertia.params.push(RigidBodyParams::default());
         Ok(RigidBodyHandle {
             index: (b.len() - 1) as u32,
@@ -217,10 +221,40 @@ impl Simulation {
         let contact = self
             .contact
             .add_object(&label, nodes, &rest, triangles, &edges, &all, thickness)?;
+        // A body does not collide with itself: not within a mesh, nor between its meshes.
         self.contact.disable_collision(contact, contact)?;
+        for &other in &self.rigid_bodies.collision_meshes[b] {
+            self.contact.disable_collision(contact, other)?;
+        }
+        self.rigid_bodies.collision_meshes[b].push(contact);
         self.output
             .add_mesh(&label, nodes, OutputCells::Triangles(triangles.to_vec()));
         Ok(RigidMeshHandle { body, nodes, contact })
+    }
+
+    /// Switch contact between every collision mesh of body `a` and every one of body `b` off or
+    /// on (typically for two jointed bodies whose meshes overlap at the joint). Applies to the
+    /// meshes the bodies have now.
+    pub fn set_bodies_collision(&mut self, a: RigidBodyHandle, b: RigidBodyHandle, enabled: bool) -> Result<()> {
+        let (ia, ib) = (self.check_body(a)?, self.check_body(b)?);
+        if ia == ib {
+            return Err(StarkError::InvalidInput(format!(
+                "set_bodies_collision: both bodies are '{}' (a body never collides with itself)",
+                self.rigid_bodies.labels[ia]
+            )));
+        }
+        for &ca in &self.rigid_bodies.collision_meshes[ia] {
+            for &cb in &self.rigid_bodies.collision_meshes[ib] {
+                self.contact.set_collision(ca, cb, enabled)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// The contact objects of body `body`'s collision meshes.
+    pub fn body_collision_meshes(&self, body: RigidBodyHandle) -> Result<&[ContactHandle]> {
+        let b = self.check_body(body)?;
+        Ok(&self.rigid_bodies.collision_meshes[b])
     }
 
     /// Give body `body` a mesh that is only drawn (vertices in the body frame, relative to its
@@ -441,5 +475,93 @@ pub(crate) fn commit_bodies(bodies: &mut BodyArrays, v: &[Vector3<f64>], n_nodes
         bodies.orientation[b] = integrate_orientation(&bodies.orientation[b], &w, dt);
         bodies.velocity[b] = vel;
         bodies.angular_velocity[b] = w;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::presets::meshes::box_mesh;
+    use crate::Settings;
+
+    fn settings() -> Settings {
+        let mut s = Settings::default();
+        s.output.frames = false;
+        s.output.step_log = false;
+        s.time_step_s = 0.01;
+        s.gravity_m_s2 = [0.0; 3];
+        s.contact.default_thickness_m = Some(1e-3);
+        s
+    }
+
+    #[test]
+    fn meshes_of_one_body_do_not_collide_with_each_other() {
+        let mut sim = Simulation::new(settings()).unwrap();
+        let props = MassProperties::cuboid(1.0, Vector3::repeat(0.1));
+        let body = sim
+            .add_rigid_body_with("body", &props, Vector3::zeros(), UnitQuaternion::identity())
+            .unwrap();
+        // Two overlapping boxes on the same body: a compound shape, not a collision.
+        let a = box_mesh(Vector3::repeat(0.1));
+        let mut b = box_mesh(Vector3::new(0.2, 0.05, 0.05));
+        b.vertices.iter_mut().for_each(|v| v.x += 0.05);
+        let ma = sim
+            .add_rigid_collision_mesh(body, &a.vertices, &a.elements, None)
+            .unwrap();
+        let mb = sim
+            .add_rigid_collision_mesh(body, &b.vertices, &b.elements, None)
+            .unwrap();
+        assert!(!sim.contact.collision_enabled(ma.contact, mb.contact).unwrap());
+        assert_eq!(sim.body_collision_meshes(body).unwrap(), &[ma.contact, mb.contact]);
+        sim.set_body_velocity(body, Vector3::new(0.1, 0.0, 0.0)).unwrap();
+        sim.run(0.05).unwrap();
+        assert!((sim.body_position(body).x - 0.005).abs() < 1e-9);
+    }
+
+    #[test]
+    fn jointed_bodies_can_overlap_with_their_collision_off() {
+        let build = |collide: bool| -> Result<Simulation> {
+            let mut sim = Simulation::new(settings())?;
+            let size = Vector3::new(0.2, 0.05, 0.05);
+            let m = box_mesh(size);
+            let props = MassProperties::cuboid(1.0, size);
+            let mut bodies = Vec::new();
+            for (k, x) in [0.0, 0.15].into_iter().enumerate() {
+                let b = sim.add_rigid_body_with(
+                    &format!("link{k}"),
+                    &props,
+                    Vector3::new(x, 0.0, 0.0),
+                    UnitQuaternion::identity(),
+                )?;
+                sim.add_rigid_collision_mesh(b, &m.vertices, &m.elements, None)?;
+                bodies.push(b);
+            }
+            // The links overlap by 5 cm around the hinge at x = 0.075.
+            sim.add_hinge_joint(
+                "hinge",
+                Some(bodies[0]),
+                bodies[1],
+                Vector3::new(0.075, 0.0, 0.0),
+                Vector3::z(),
+                joints::JointParams::default(),
+            )?;
+            sim.set_bodies_collision(bodies[0], bodies[1], collide)?;
+            sim.set_body_angular_velocity(bodies[1], Vector3::new(0.0, 0.0, 1.0))?;
+            sim.run(0.05)?;
+            Ok(sim)
+        };
+        let err = build(true)
+            .err()
+            .expect("overlapping colliding bodies must be rejected");
+        assert!(err.to_string().contains("intersect"), "{err}");
+        let sim = build(false).unwrap();
+        let w = sim.body_angular_velocity(RigidBodyHandle { index: 1 }).z;
+        assert!(w > 0.1, "the hinge turns freely: {w}");
+        let bad = Simulation::new(settings()).unwrap().set_bodies_collision(
+            RigidBodyHandle { index: 0 },
+            RigidBodyHandle { index: 1 },
+            false,
+        );
+        assert!(bad.is_err());
     }
 }
