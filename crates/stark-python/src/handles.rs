@@ -63,6 +63,10 @@ macro_rules! index_handle {
 }
 
 index_handle! {
+    /// A group of deformable nodes glued to a rigid body (`attach_to_body`).
+    RigidAttachmentHandle => stark::rigidbodies::attachments::RigidAttachmentHandle
+}
+index_handle! {
     /// The lumped inertia of one deformable object (`sim.params(h)`, `sim.mass(h)`).
     InertiaHandle => stark::deformables::InertiaHandle
 }
@@ -477,6 +481,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<AttachmentHandle>()?;
     m.add_class::<RigidBody>()?;
     m.add_class::<RigidMesh>()?;
+    m.add_class::<RigidAttachmentHandle>()?;
     m.add_class::<Surface>()?;
     m.add_class::<Volume>()?;
     m.add_class::<Line>()?;

@@ -7,13 +7,14 @@
 //!
 //! Layout mirrors the library: `params.rs` (settings, parameters, materials), `handles.rs`,
 //! `simulation.rs`, `rigid.rs`, `scene.rs`, `meshes.rs` and `geometry.rs`; `convert.rs` holds
-//! the NumPy and error conversions. Joints, when the library has them, get `add_*` methods on
-//! `Simulation` returning handles (like `add_rigid_body`), with their parameters read and
-//! written through `Simulation.params`/`set_params` like every other model.
+//! the NumPy and error conversions. `joints.rs` adds the joint, rigid-preset and
+//! deformable–rigid attachment methods to `Simulation` (`add_hinge_joint`, `add_box`,
+//! `attach_to_body`, ...), returning `Joint`, `RigidObject` and `RigidAttachmentHandle`.
 
 mod convert;
 mod geometry;
 mod handles;
+mod joints;
 mod meshes;
 mod params;
 mod rigid;
@@ -35,6 +36,7 @@ fn _starkrs(m: &Bound<'_, PyModule>) -> PyResult<()> {
     handles::register(m)?;
     rigid::register(m)?;
     simulation::register(m)?;
+    joints::register(m)?;
     scene::register(m)?;
     m.add_submodule(&geometry::module(py)?)?;
     m.add_submodule(&meshes::module(py)?)?;

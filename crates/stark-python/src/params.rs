@@ -434,6 +434,19 @@ mirror! {
     }
 }
 
+mirror! {
+    /// Parameters common to the composite joints: the penalty stiffness of their hard
+    /// constraints and the tolerances they are hardened to.
+    JointParams => stark::rigidbodies::joints::JointParams {
+        /// Stiffness of the hard constraints, N/m (default: 1e6).
+        stiffness: f64,
+        /// Tolerance of the point constraints, m (default: 1e-3).
+        tolerance_m: f64,
+        /// Tolerance of the direction constraints, degrees (default: 1).
+        tolerance_deg: f64,
+    }
+}
+
 // ---------------------------------------------------------------------------------------------
 // Materials
 // ---------------------------------------------------------------------------------------------
@@ -585,6 +598,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PrescribedParams>()?;
     m.add_class::<AttachmentParams>()?;
     m.add_class::<RigidBodyParams>()?;
+    m.add_class::<JointParams>()?;
     m.add_class::<LineMaterial>()?;
     m.add_class::<VolumeMaterial>()?;
     m.add_class::<SurfaceMaterial>()?;

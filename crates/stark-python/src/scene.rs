@@ -17,12 +17,14 @@ pub struct Scene {
     pub duration_s: f64,
     /// Scene name.
     pub name: String,
-    /// The objects by name: Surface, Volume, Line or Obstacle handles (scene files only).
+    /// The objects by name: Surface, Volume, Line, Obstacle or RigidBody handles (scene files only).
     pub objects: Py<PyDict>,
     /// The `[[prescribed]]` entries in file order: dicts with `object`, `handle` and `nodes`.
     pub prescribed: Py<PyList>,
     /// The `[[attachment]]` entries by label.
     pub attachments: Py<PyDict>,
+    /// The joints by label: the `[[joint]]` entries and the fix joints of fixed bodies (`<body>.fixed`).
+    pub joints: Py<PyDict>,
 }
 
 #[pymethods]
@@ -101,6 +103,17 @@ fn wrap(py: Python<'_>, scene: stark::io::LoadedScene) -> PyResult<Scene> {
     for (label, h) in &scene.attachments {
         attachments.set_item(label, AttachmentHandle { handle: *h, sim: id })?;
     }
+    let joints = PyDict::new(py);
+    for h in &scene.joints {
+        joints.set_item(
+            &h.label,
+            crate::joints::Joint {
+                label: h.label.clone(),
+                handle: h.clone(),
+                sim: id,
+            },
+        )?;
+    }
     Ok(Scene {
         simulation: Py::new(py, sim)?,
         duration_s: scene.duration_s,
@@ -108,6 +121,7 @@ fn wrap(py: Python<'_>, scene: stark::io::LoadedScene) -> PyResult<Scene> {
         objects: objects.unbind(),
         prescribed: prescribed.unbind(),
         attachments: attachments.unbind(),
+        joints: joints.unbind(),
     })
 }
 
@@ -177,13 +191,26 @@ fn builtin_scene(py: Python<'_>, name: &str, settings: Option<&Bound<'_, params:
         return Err(stark_err("scene without a name"));
     }
     let name = sim.settings.name.clone();
+    let named_joints = sim.rigid_bodies.named_joints.clone();
+    let simulation = Simulation::wrap(sim);
+    let joints = PyDict::new(py);
+    for h in named_joints {
+        let label = h.label.clone();
+        let joint = crate::joints::Joint {
+            label: label.clone(),
+            handle: h,
+            sim: simulation.id(),
+        };
+        joints.set_item(label, joint)?;
+    }
     Ok(Scene {
-        simulation: Py::new(py, Simulation::wrap(sim))?,
+        simulation: Py::new(py, simulation)?,
         duration_s: scene.duration_s,
         name,
         objects: PyDict::new(py).unbind(),
         prescribed: PyList::empty(py).unbind(),
         attachments: PyDict::new(py).unbind(),
+        joints: joints.unbind(),
     })
 }
 

@@ -91,7 +91,7 @@ impl Simulation {
     }
 
     /// Run `f` on the library simulation (idle, or lent to a callback).
-    fn with<R>(&self, f: impl FnOnce(&mut stark::Simulation) -> stark::Result<R>) -> PyResult<R> {
+    pub(crate) fn with<R>(&self, f: impl FnOnce(&mut stark::Simulation) -> stark::Result<R>) -> PyResult<R> {
         let mut core = self.core.lock().unwrap_or_else(|e| e.into_inner());
         match &mut *core {
             Core::Owned(sim) => guarded(|| f(sim)),
@@ -105,12 +105,12 @@ impl Simulation {
     }
 
     /// [`Self::with`] for infallible access.
-    fn get<R>(&self, f: impl FnOnce(&mut stark::Simulation) -> R) -> PyResult<R> {
+    pub(crate) fn get<R>(&self, f: impl FnOnce(&mut stark::Simulation) -> R) -> PyResult<R> {
         self.with(|s| Ok(f(s)))
     }
 
     /// Check that a handle was issued by this simulation.
-    fn own(&self, h: &impl Issued) -> PyResult<()> {
+    pub(crate) fn own(&self, h: &impl Issued) -> PyResult<()> {
         if h.simulation_id() == self.id {
             Ok(())
         } else {
@@ -1357,7 +1357,7 @@ impl Simulation {
 }
 
 impl Simulation {
-    fn body(&self, body: &BodyArg) -> PyResult<stark::rigidbodies::RigidBodyHandle> {
+    pub(crate) fn body(&self, body: &BodyArg) -> PyResult<stark::rigidbodies::RigidBodyHandle> {
         self.own(&body.0)?;
         Ok(body.0.rust())
     }

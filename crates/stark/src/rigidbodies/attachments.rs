@@ -40,6 +40,26 @@ impl RigidAttachmentSet {
         Ok(self.ranges[g].clone().map(|e| self.gap(e, state)).fold(0.0, f64::max))
     }
 
+    /// Largest gap of a group at the bodies' poses and node positions of `sim` (after the last
+    /// step), m.
+    pub fn max_gap_now_m(&self, h: RigidAttachmentHandle, sim: &Simulation) -> Result<f64> {
+        let g = self.groups.check("rigid attachment", h.0)?;
+        let world = |n: Node| match n {
+            Node::Rigid { body, local } => {
+                sim.bodies.position[body as usize] + sim.bodies.orientation[body as usize] * Vector3::from(local)
+            }
+            Node::Point(i) => sim.nodes.x[i as usize],
+            _ => unreachable!("rigid attachments join a body point and a node"),
+        };
+        Ok(self.ranges[g]
+            .clone()
+            .map(|e| {
+                let [a, b] = self.elements[e];
+                (world(a) - world(b)).norm()
+            })
+            .fold(0.0, f64::max))
+    }
+
     /// Parameters of a group.
     pub fn params(&self, h: RigidAttachmentHandle) -> Result<&AttachmentParams> {
         self.groups.get("rigid attachment", h.0)

@@ -395,7 +395,7 @@ fn check_axis(label: &str, axis: &Vector3<f64>) -> Result<()> {
 }
 
 /// Joint-level parameters common to composite joints.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct JointParams {
     /// Stiffness of the hard primitives, N/m (default 1e6).
     pub stiffness: f64,

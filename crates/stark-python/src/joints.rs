@@ -1,0 +1,896 @@
+//! Joints, motors and servos between rigid bodies (or a body and the world), rigid-body presets
+//! and deformable–rigid attachments: `Simulation` methods mirroring the library's
+//! `rigidbodies::joints`, `presets::rigid` and `rigidbodies::attachments`.
+//!
+//! Argument names are the library's (units in the names). Body `a` may be `None`: the world.
+
+use crate::convert::{Elements, Indices, Points, Rot, V3};
+use crate::handles::*;
+use crate::params::{self, Mirror};
+use crate::simulation::Simulation;
+use nalgebra::{UnitQuaternion, Vector3};
+use pyo3::prelude::*;
+use stark::rigidbodies::joints::{JointHandle, DEFAULT_CONTROLLER_DELAY};
+use stark::rigidbodies::RigidBodyHandle;
+
+/// A joint: returned by the `Simulation.add_*` joint methods and taken by the joint setters
+/// and `joint_state`.
+#[pyclass(module = "starkrs", frozen, from_py_object)]
+#[derive(Clone, Debug)]
+pub struct Joint {
+    /// Its label.
+    #[pyo3(get)]
+    pub label: String,
+    /// The library handle.
+    pub handle: JointHandle,
+    /// The issuing simulation.
+    pub sim: u64,
+}
+
+#[pymethods]
+impl Joint {
+    fn __repr__(&self) -> String {
+        format!("Joint('{}')", self.label)
+    }
+    /// Whether it has a driver (motor, press, velocity controller, servo or spring).
+    #[getter]
+    fn has_driver(&self) -> bool {
+        self.handle.driver.is_some()
+    }
+    /// Whether it has a coordinate (a hinge angle or a slider position).
+    #[getter]
+    fn has_coordinate(&self) -> bool {
+        self.handle.measure.is_some()
+    }
+}
+
+impl Issued for Joint {
+    fn simulation_id(&self) -> u64 {
+        self.sim
+    }
+}
+
+/// A joint's state at the last accepted step (`Simulation.joint_state`).
+#[pyclass(module = "starkrs", frozen, get_all)]
+#[derive(Clone, Debug)]
+pub struct JointState {
+    /// Largest violation of its length constraints, m.
+    pub violation_m: f64,
+    /// Largest violation of its angle constraints, rad.
+    pub violation_rad: f64,
+    /// Total force of the joint on body b (world frame), N.
+    pub force_on_b_n: [f64; 3],
+    /// Total torque of the joint on body b about its centre of mass, N·m.
+    pub torque_on_b_n_m: [f64; 3],
+    /// Its driver's effort: torque (N·m) or force (N) along the driver's axis for motors, presses,
+    /// velocity controllers and servos (positive when driving b along +axis); a spring's tension (N).
+    pub driver_effort: f64,
+    /// Its coordinate: hinge angle (rad) or slider position (m), or None.
+    pub coordinate: Option<f64>,
+    /// Rate of its coordinate, rad/s or m/s, or None.
+    pub coordinate_rate: Option<f64>,
+}
+
+#[pymethods]
+impl JointState {
+    fn __repr__(&self) -> String {
+        format!(
+            "JointState(coordinate={:?}, coordinate_rate={:?}, driver_effort={}, violation_m={:.3e}, violation_rad={:.3e})",
+            self.coordinate, self.coordinate_rate, self.driver_effort, self.violation_m, self.violation_rad
+        )
+    }
+}
+
+impl From<stark::rigidbodies::joints::JointState> for JointState {
+    fn from(s: stark::rigidbodies::joints::JointState) -> Self {
+        JointState {
+            violation_m: s.violation_m,
+            violation_rad: s.violation_rad,
+            force_on_b_n: s.force_on_b_n,
+            torque_on_b_n_m: s.torque_on_b_n_m,
+            driver_effort: s.driver_effort,
+            coordinate: s.coordinate,
+            coordinate_rate: s.coordinate_rate,
+        }
+    }
+}
+
+/// A rigid body made by a preset: the body and its collision mesh.
+#[pyclass(module = "starkrs", frozen, get_all, from_py_object)]
+#[derive(Clone, Debug)]
+pub struct RigidObject {
+    /// The body.
+    pub body: RigidBody,
+    /// Its collision mesh.
+    pub mesh: RigidMesh,
+}
+
+#[pymethods]
+impl RigidObject {
+    fn __repr__(&self) -> String {
+        format!("RigidObject('{}')", self.body.label)
+    }
+}
+
+fn joint_params_arg(
+    py: Python<'_>,
+    p: Option<&Bound<'_, params::JointParams>>,
+) -> PyResult<stark::rigidbodies::joints::JointParams> {
+    match p {
+        Some(p) => p.borrow().to_rust(py),
+        None => Ok(Default::default()),
+    }
+}
+
+impl Simulation {
+    fn a_body(&self, a: &Option<BodyArg>) -> PyResult<Option<RigidBodyHandle>> {
+        a.as_ref().map(|a| self.body(a)).transpose()
+    }
+
+    fn joint_out(&self, h: JointHandle) -> Joint {
+        Joint {
+            label: h.label.clone(),
+            handle: h,
+            sim: self.id(),
+        }
+    }
+
+    /// A joint from `a` (or the world) and `b` made by `f`.
+    fn make_joint(
+        &self,
+        a: &Option<BodyArg>,
+        b: &BodyArg,
+        f: impl FnOnce(&mut stark::Simulation, Option<RigidBodyHandle>, RigidBodyHandle) -> stark::Result<JointHandle>,
+    ) -> PyResult<Joint> {
+        let (a, b) = (self.a_body(a)?, self.body(b)?);
+        let h = self.with(|s| f(s, a, b))?;
+        Ok(self.joint_out(h))
+    }
+
+    fn joint_arg(&self, joint: &Joint) -> PyResult<JointHandle> {
+        self.own(joint)?;
+        Ok(joint.handle.clone())
+    }
+
+    fn rigid_object(&self, label: &str, h: stark::presets::RigidHandle) -> RigidObject {
+        let body = RigidBody {
+            index: h.body.index,
+            label: label.to_string(),
+            sim: self.id(),
+        };
+        RigidObject {
+            mesh: RigidMesh {
+                body: body.clone(),
+                nodes: NodeSet::new(self.id(), h.mesh.nodes),
+                contact: ContactHandle::new(self.id(), h.mesh.contact),
+            },
+            body,
+        }
+    }
+}
+
+fn pose(position_m: Option<V3>, orientation: Option<Rot>) -> (Vector3<f64>, UnitQuaternion<f64>) {
+    (
+        position_m.map(|p| p.0).unwrap_or_else(Vector3::zeros),
+        orientation.map(|q| q.0).unwrap_or_else(UnitQuaternion::identity),
+    )
+}
+
+#[pymethods]
+impl Simulation {
+    // ---- Joints ----
+
+    /// Ball joint: body b's point at `point_m` (world, now) stays on a's (or the world's).
+    #[pyo3(signature = (label, a, b, point_m, params=None))]
+    fn add_ball_joint(
+        &self,
+        py: Python<'_>,
+        label: &str,
+        a: Option<BodyArg>,
+        b: BodyArg,
+        point_m: V3,
+        params: Option<&Bound<'_, params::JointParams>>,
+    ) -> PyResult<Joint> {
+        let p = joint_params_arg(py, params)?;
+        self.make_joint(&a, &b, |s, a, b| s.add_ball_joint(label, a, b, point_m.0, p))
+    }
+
+    /// Ball joint whose `direction` (world, now; fixed in both bodies) may tilt by at most
+    /// `limit_deg`.
+    #[pyo3(signature = (label, a, b, point_m, direction, limit_deg, params=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn add_ball_joint_with_cone_limit(
+        &self,
+        py: Python<'_>,
+        label: &str,
+        a: Option<BodyArg>,
+        b: BodyArg,
+        point_m: V3,
+        direction: V3,
+        limit_deg: f64,
+        params: Option<&Bound<'_, params::JointParams>>,
+    ) -> PyResult<Joint> {
+        let p = joint_params_arg(py, params)?;
+        self.make_joint(&a, &b, |s, a, b| {
+            s.add_ball_joint_with_cone_limit(label, a, b, point_m.0, direction.0, limit_deg, p)
+        })
+    }
+
+    /// Body b's point at `point_m` stays on the line through it along `axis` fixed in a.
+    #[pyo3(signature = (label, a, b, point_m, axis, params=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn add_point_on_axis_joint(
+        &self,
+        py: Python<'_>,
+        label: &str,
+        a: Option<BodyArg>,
+        b: BodyArg,
+        point_m: V3,
+        axis: V3,
+        params: Option<&Bound<'_, params::JointParams>>,
+    ) -> PyResult<Joint> {
+        let p = joint_params_arg(py, params)?;
+        self.make_joint(&a, &b, |s, a, b| {
+            s.add_point_on_axis_joint(label, a, b, point_m.0, axis.0, p)
+        })
+    }
+
+    /// The distance between a's point `point_a_m` and b's point `point_b_m` (world, now) stays
+    /// what it is now.
+    #[pyo3(signature = (label, a, b, point_a_m, point_b_m, params=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn add_distance_joint(
+        &self,
+        py: Python<'_>,
+        label: &str,
+        a: Option<BodyArg>,
+        b: BodyArg,
+        point_a_m: V3,
+        point_b_m: V3,
+        params: Option<&Bound<'_, params::JointParams>>,
+    ) -> PyResult<Joint> {
+        let p = joint_params_arg(py, params)?;
+        self.make_joint(&a, &b, |s, a, b| {
+            s.add_distance_joint(label, a, b, point_a_m.0, point_b_m.0, p)
+        })
+    }
+
+    /// The distance between the two points stays within `[min_m, max_m]`.
+    #[pyo3(signature = (label, a, b, point_a_m, point_b_m, min_m, max_m, params=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn add_distance_limits(
+        &self,
+        py: Python<'_>,
+        label: &str,
+        a: Option<BodyArg>,
+        b: BodyArg,
+        point_a_m: V3,
+        point_b_m: V3,
+        min_m: f64,
+        max_m: f64,
+        params: Option<&Bound<'_, params::JointParams>>,
+    ) -> PyResult<Joint> {
+        let p = joint_params_arg(py, params)?;
+        self.make_joint(&a, &b, |s, a, b| {
+            s.add_distance_limits(label, a, b, point_a_m.0, point_b_m.0, min_m, max_m, p)
+        })
+    }
+
+    /// Damped spring between the two points, rest length = their distance now; `limits_m`
+    /// (min, max) adds hard distance limits.
+    #[pyo3(signature = (label, a, b, point_a_m, point_b_m, stiffness_n_m, damping_n_s_m=0.0, limits_m=None, params=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn add_spring(
+        &self,
+        py: Python<'_>,
+        label: &str,
+        a: Option<BodyArg>,
+        b: BodyArg,
+        point_a_m: V3,
+        point_b_m: V3,
+        stiffness_n_m: f64,
+        damping_n_s_m: f64,
+        limits_m: Option<(f64, f64)>,
+        params: Option<&Bound<'_, params::JointParams>>,
+    ) -> PyResult<Joint> {
+        let p = joint_params_arg(py, params)?;
+        self.make_joint(&a, &b, |s, a, b| {
+            s.add_spring(
+                label,
+                a,
+                b,
+                point_a_m.0,
+                point_b_m.0,
+                stiffness_n_m,
+                damping_n_s_m,
+                limits_m,
+                p,
+            )
+        })
+    }
+
+    /// `direction` (world, now) stays the same in both bodies.
+    #[pyo3(signature = (label, a, b, direction, params=None))]
+    fn add_direction_joint(
+        &self,
+        py: Python<'_>,
+        label: &str,
+        a: Option<BodyArg>,
+        b: BodyArg,
+        direction: V3,
+        params: Option<&Bound<'_, params::JointParams>>,
+    ) -> PyResult<Joint> {
+        let p = joint_params_arg(py, params)?;
+        self.make_joint(&a, &b, |s, a, b| s.add_direction_joint(label, a, b, direction.0, p))
+    }
+
+    /// The angle between `direction` in a and in b stays below `limit_deg`.
+    #[pyo3(signature = (label, a, b, direction, limit_deg, params=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn add_angle_limit(
+        &self,
+        py: Python<'_>,
+        label: &str,
+        a: Option<BodyArg>,
+        b: BodyArg,
+        direction: V3,
+        limit_deg: f64,
+        params: Option<&Bound<'_, params::JointParams>>,
+    ) -> PyResult<Joint> {
+        let p = joint_params_arg(py, params)?;
+        self.make_joint(&a, &b, |s, a, b| {
+            s.add_angle_limit(label, a, b, direction.0, limit_deg, p)
+        })
+    }
+
+    /// Fix a body to the world where it is; `set_fixed_transform` then drives it kinematically.
+    #[pyo3(signature = (label, body, params=None))]
+    fn add_fix_joint(
+        &self,
+        py: Python<'_>,
+        label: &str,
+        body: BodyArg,
+        params: Option<&Bound<'_, params::JointParams>>,
+    ) -> PyResult<Joint> {
+        let p = joint_params_arg(py, params)?;
+        let b = self.body(&body)?;
+        let h = self.with(|s| s.add_fix_joint(label, b, p))?;
+        Ok(self.joint_out(h))
+    }
+
+    /// Glue body b to body a in their current relative pose.
+    #[pyo3(signature = (label, a, b, params=None))]
+    fn add_attachment_joint(
+        &self,
+        py: Python<'_>,
+        label: &str,
+        a: BodyArg,
+        b: BodyArg,
+        params: Option<&Bound<'_, params::JointParams>>,
+    ) -> PyResult<Joint> {
+        let p = joint_params_arg(py, params)?;
+        let (a, b) = (self.body(&a)?, self.body(&b)?);
+        let h = self.with(|s| s.add_attachment_joint(label, a, b, p))?;
+        Ok(self.joint_out(h))
+    }
+
+    /// Hinge about `axis` through `point_m` (world, now).
+    #[pyo3(signature = (label, a, b, point_m, axis, params=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn add_hinge_joint(
+        &self,
+        py: Python<'_>,
+        label: &str,
+        a: Option<BodyArg>,
+        b: BodyArg,
+        point_m: V3,
+        axis: V3,
+        params: Option<&Bound<'_, params::JointParams>>,
+    ) -> PyResult<Joint> {
+        let p = joint_params_arg(py, params)?;
+        self.make_joint(&a, &b, |s, a, b| s.add_hinge_joint(label, a, b, point_m.0, axis.0, p))
+    }
+
+    /// Hinge that turns at most `limit_deg` either way from its current angle.
+    #[pyo3(signature = (label, a, b, point_m, axis, limit_deg, params=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn add_hinge_joint_with_limit(
+        &self,
+        py: Python<'_>,
+        label: &str,
+        a: Option<BodyArg>,
+        b: BodyArg,
+        point_m: V3,
+        axis: V3,
+        limit_deg: f64,
+        params: Option<&Bound<'_, params::JointParams>>,
+    ) -> PyResult<Joint> {
+        let p = joint_params_arg(py, params)?;
+        self.make_joint(&a, &b, |s, a, b| {
+            s.add_hinge_joint_with_limit(label, a, b, point_m.0, axis.0, limit_deg, p)
+        })
+    }
+
+    /// Universal (Cardan) joint at `point_m`: `axis_a` (in a) stays perpendicular to `axis_b`
+    /// (in b); they must be perpendicular now.
+    #[pyo3(signature = (label, a, b, point_m, axis_a, axis_b, params=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn add_universal_joint(
+        &self,
+        py: Python<'_>,
+        label: &str,
+        a: Option<BodyArg>,
+        b: BodyArg,
+        point_m: V3,
+        axis_a: V3,
+        axis_b: V3,
+        params: Option<&Bound<'_, params::JointParams>>,
+    ) -> PyResult<Joint> {
+        let p = joint_params_arg(py, params)?;
+        self.make_joint(&a, &b, |s, a, b| {
+            s.add_universal_joint(label, a, b, point_m.0, axis_a.0, axis_b.0, p)
+        })
+    }
+
+    /// Slider: b moves along `axis` through `point_m` and may turn about it.
+    #[pyo3(signature = (label, a, b, point_m, axis, params=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn add_slider_joint(
+        &self,
+        py: Python<'_>,
+        label: &str,
+        a: Option<BodyArg>,
+        b: BodyArg,
+        point_m: V3,
+        axis: V3,
+        params: Option<&Bound<'_, params::JointParams>>,
+    ) -> PyResult<Joint> {
+        let p = joint_params_arg(py, params)?;
+        self.make_joint(&a, &b, |s, a, b| s.add_slider_joint(label, a, b, point_m.0, axis.0, p))
+    }
+
+    /// Prismatic joint: b only translates along `axis`.
+    #[pyo3(signature = (label, a, b, point_m, axis, params=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn add_prismatic_joint(
+        &self,
+        py: Python<'_>,
+        label: &str,
+        a: Option<BodyArg>,
+        b: BodyArg,
+        point_m: V3,
+        axis: V3,
+        params: Option<&Bound<'_, params::JointParams>>,
+    ) -> PyResult<Joint> {
+        let p = joint_params_arg(py, params)?;
+        self.make_joint(&a, &b, |s, a, b| {
+            s.add_prismatic_joint(label, a, b, point_m.0, axis.0, p)
+        })
+    }
+
+    /// Prismatic press: a prismatic joint driven at `target_m_s` along `axis` with at most
+    /// `max_force_n`; `delay_m_s` is the speed error over which the force ramps up.
+    #[pyo3(signature = (label, a, b, point_m, axis, target_m_s, max_force_n, delay_m_s=DEFAULT_CONTROLLER_DELAY, params=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn add_prismatic_press(
+        &self,
+        py: Python<'_>,
+        label: &str,
+        a: Option<BodyArg>,
+        b: BodyArg,
+        point_m: V3,
+        axis: V3,
+        target_m_s: f64,
+        max_force_n: f64,
+        delay_m_s: f64,
+        params: Option<&Bound<'_, params::JointParams>>,
+    ) -> PyResult<Joint> {
+        let p = joint_params_arg(py, params)?;
+        self.make_joint(&a, &b, |s, a, b| {
+            s.add_prismatic_press(label, a, b, point_m.0, axis.0, target_m_s, max_force_n, delay_m_s, p)
+        })
+    }
+
+    /// Motor: a hinge driven at `target_rad_s` about `axis` with at most `max_torque_n_m`.
+    #[pyo3(signature = (label, a, b, point_m, axis, target_rad_s, max_torque_n_m, delay_rad_s=DEFAULT_CONTROLLER_DELAY, params=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn add_motor(
+        &self,
+        py: Python<'_>,
+        label: &str,
+        a: Option<BodyArg>,
+        b: BodyArg,
+        point_m: V3,
+        axis: V3,
+        target_rad_s: f64,
+        max_torque_n_m: f64,
+        delay_rad_s: f64,
+        params: Option<&Bound<'_, params::JointParams>>,
+    ) -> PyResult<Joint> {
+        let p = joint_params_arg(py, params)?;
+        self.make_joint(&a, &b, |s, a, b| {
+            s.add_motor(
+                label,
+                a,
+                b,
+                point_m.0,
+                axis.0,
+                target_rad_s,
+                max_torque_n_m,
+                delay_rad_s,
+                p,
+            )
+        })
+    }
+
+    /// Angular velocity controller alone: drives `(ω_b − ω_a)·axis` to `target_rad_s` with at
+    /// most `max_torque_n_m`.
+    #[pyo3(signature = (label, a, b, axis, target_rad_s, max_torque_n_m, delay_rad_s=DEFAULT_CONTROLLER_DELAY))]
+    #[allow(clippy::too_many_arguments)]
+    fn add_angular_velocity_controller(
+        &self,
+        label: &str,
+        a: Option<BodyArg>,
+        b: BodyArg,
+        axis: V3,
+        target_rad_s: f64,
+        max_torque_n_m: f64,
+        delay_rad_s: f64,
+    ) -> PyResult<Joint> {
+        self.make_joint(&a, &b, |s, a, b| {
+            s.add_angular_velocity_controller(label, a, b, axis.0, target_rad_s, max_torque_n_m, delay_rad_s)
+        })
+    }
+
+    /// Linear velocity controller alone: drives the relative velocity of the points at
+    /// `point_m` along `axis` to `target_m_s` with at most `max_force_n`.
+    #[pyo3(signature = (label, a, b, point_m, axis, target_m_s, max_force_n, delay_m_s=DEFAULT_CONTROLLER_DELAY))]
+    #[allow(clippy::too_many_arguments)]
+    fn add_linear_velocity_controller(
+        &self,
+        label: &str,
+        a: Option<BodyArg>,
+        b: BodyArg,
+        point_m: V3,
+        axis: V3,
+        target_m_s: f64,
+        max_force_n: f64,
+        delay_m_s: f64,
+    ) -> PyResult<Joint> {
+        self.make_joint(&a, &b, |s, a, b| {
+            s.add_linear_velocity_controller(label, a, b, point_m.0, axis.0, target_m_s, max_force_n, delay_m_s)
+        })
+    }
+
+    /// Hinge servo: a motor that turns to `target_deg` (relative to now) with at most
+    /// `max_torque_n_m`, closing the error within about `response_time_s`.
+    #[pyo3(signature = (label, a, b, point_m, axis, target_deg, max_torque_n_m, response_time_s, params=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn add_hinge_servo(
+        &self,
+        py: Python<'_>,
+        label: &str,
+        a: Option<BodyArg>,
+        b: BodyArg,
+        point_m: V3,
+        axis: V3,
+        target_deg: f64,
+        max_torque_n_m: f64,
+        response_time_s: f64,
+        params: Option<&Bound<'_, params::JointParams>>,
+    ) -> PyResult<Joint> {
+        let p = joint_params_arg(py, params)?;
+        self.make_joint(&a, &b, |s, a, b| {
+            s.add_hinge_servo(
+                label,
+                a,
+                b,
+                point_m.0,
+                axis.0,
+                target_deg,
+                max_torque_n_m,
+                response_time_s,
+                p,
+            )
+        })
+    }
+
+    /// Prismatic servo: a press that moves to `target_m` (relative to now) along `axis` with at
+    /// most `max_force_n`, closing the error within about `response_time_s`.
+    #[pyo3(signature = (label, a, b, point_m, axis, target_m, max_force_n, response_time_s, params=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn add_prismatic_servo(
+        &self,
+        py: Python<'_>,
+        label: &str,
+        a: Option<BodyArg>,
+        b: BodyArg,
+        point_m: V3,
+        axis: V3,
+        target_m: f64,
+        max_force_n: f64,
+        response_time_s: f64,
+        params: Option<&Bound<'_, params::JointParams>>,
+    ) -> PyResult<Joint> {
+        let p = joint_params_arg(py, params)?;
+        self.make_joint(&a, &b, |s, a, b| {
+            s.add_prismatic_servo(
+                label,
+                a,
+                b,
+                point_m.0,
+                axis.0,
+                target_m,
+                max_force_n,
+                response_time_s,
+                p,
+            )
+        })
+    }
+
+    /// Every joint made so far, in creation order.
+    fn joints(&self) -> PyResult<Vec<Joint>> {
+        let hs = self.get(|s| s.rigid_bodies.named_joints.clone())?;
+        Ok(hs.into_iter().map(|h| self.joint_out(h)).collect())
+    }
+
+    /// The joint labelled `label`, or None.
+    fn joint(&self, label: &str) -> PyResult<Option<Joint>> {
+        let h = self.get(|s| s.rigid_bodies.named_joints.iter().find(|j| j.label == label).cloned())?;
+        Ok(h.map(|h| self.joint_out(h)))
+    }
+
+    /// The joint's state at the last accepted step.
+    fn joint_state(&self, joint: Joint) -> PyResult<JointState> {
+        let h = self.joint_arg(&joint)?;
+        Ok(self.get(|s| s.joint_state(&h))?.into())
+    }
+
+    /// Switch a joint on or off (off: it exerts nothing).
+    fn set_joint_enabled(&self, joint: Joint, enabled: bool) -> PyResult<()> {
+        let h = self.joint_arg(&joint)?;
+        self.with(|s| s.set_joint_enabled(&h, enabled))
+    }
+
+    /// Stiffness of the joint's hard constraints, N/m.
+    fn set_joint_stiffness(&self, joint: Joint, stiffness: f64) -> PyResult<()> {
+        let h = self.joint_arg(&joint)?;
+        self.with(|s| s.set_joint_stiffness(&h, stiffness))
+    }
+
+    /// Tolerances the joint is hardened to: m and degrees.
+    fn set_joint_tolerance(&self, joint: Joint, tolerance_m: f64, tolerance_deg: f64) -> PyResult<()> {
+        let h = self.joint_arg(&joint)?;
+        self.with(|s| s.set_joint_tolerance(&h, tolerance_m, tolerance_deg))
+    }
+
+    /// Target velocity of a motor, press or velocity controller: rad/s or m/s.
+    fn set_joint_target_velocity(&self, joint: Joint, target: f64) -> PyResult<()> {
+        let h = self.joint_arg(&joint)?;
+        self.with(|s| s.set_joint_target_velocity(&h, target))
+    }
+
+    /// Largest torque (N·m) or force (N) of a motor, press, controller or servo.
+    fn set_joint_max_effort(&self, joint: Joint, max: f64) -> PyResult<()> {
+        let h = self.joint_arg(&joint)?;
+        self.with(|s| s.set_joint_max_effort(&h, max))
+    }
+
+    /// Target of a servo: degrees for a hinge servo, metres for a prismatic one.
+    fn set_servo_target(&self, joint: Joint, target: f64) -> PyResult<()> {
+        let h = self.joint_arg(&joint)?;
+        self.with(|s| s.set_servo_target(&h, target))
+    }
+
+    /// Rest length (m) and damping (N·s/m) of a spring.
+    fn set_spring(&self, joint: Joint, rest_length_m: f64, damping_n_s_m: f64) -> PyResult<()> {
+        let h = self.joint_arg(&joint)?;
+        self.with(|s| s.set_spring(&h, rest_length_m, damping_n_s_m))
+    }
+
+    /// Target pose of a fix joint's body: position (m) of its centre of mass and orientation
+    /// (quaternion (w, x, y, z) or (3, 3) matrix).
+    fn set_fixed_transform(&self, joint: Joint, position_m: V3, orientation: Rot) -> PyResult<()> {
+        let h = self.joint_arg(&joint)?;
+        self.with(|s| s.set_fixed_transform(&h, position_m.0, orientation.0))
+    }
+
+    /// Target pose of a fix joint's body: its initial pose moved by `position_m` and turned by
+    /// `angle_deg` about `axis`.
+    fn set_fixed_transform_deg(&self, joint: Joint, position_m: V3, angle_deg: f64, axis: V3) -> PyResult<()> {
+        let h = self.joint_arg(&joint)?;
+        self.with(|s| s.set_fixed_transform_deg(&h, position_m.0, angle_deg, axis.0))
+    }
+
+    // ---- Rigid-body presets ----
+
+    /// A solid box of `mass_kg` and side lengths `size_m` with its collision mesh.
+    #[pyo3(signature = (label, mass_kg, size_m, position_m=None, orientation=None, thickness_m=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn add_box(
+        &self,
+        label: &str,
+        mass_kg: f64,
+        size_m: V3,
+        position_m: Option<V3>,
+        orientation: Option<Rot>,
+        thickness_m: Option<f64>,
+    ) -> PyResult<RigidObject> {
+        let (p, q) = pose(position_m, orientation);
+        let h = self.with(|s| s.add_box(label, mass_kg, size_m.0, p, q, thickness_m))?;
+        Ok(self.rigid_object(label, h))
+    }
+
+    /// A solid sphere (icosphere mesh with `subdivisions`).
+    #[pyo3(signature = (label, mass_kg, radius_m, subdivisions=2, position_m=None, orientation=None, thickness_m=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn add_sphere(
+        &self,
+        label: &str,
+        mass_kg: f64,
+        radius_m: f64,
+        subdivisions: usize,
+        position_m: Option<V3>,
+        orientation: Option<Rot>,
+        thickness_m: Option<f64>,
+    ) -> PyResult<RigidObject> {
+        let (p, q) = pose(position_m, orientation);
+        let h = self.with(|s| s.add_sphere(label, mass_kg, radius_m, subdivisions, p, q, thickness_m))?;
+        Ok(self.rigid_object(label, h))
+    }
+
+    /// A solid cylinder along z (mesh with `slices` around and `stacks` along).
+    #[pyo3(signature = (label, mass_kg, radius_m, height_m, slices=16, stacks=1, position_m=None, orientation=None, thickness_m=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn add_cylinder(
+        &self,
+        label: &str,
+        mass_kg: f64,
+        radius_m: f64,
+        height_m: f64,
+        slices: usize,
+        stacks: usize,
+        position_m: Option<V3>,
+        orientation: Option<Rot>,
+        thickness_m: Option<f64>,
+    ) -> PyResult<RigidObject> {
+        let (p, q) = pose(position_m, orientation);
+        let h = self.with(|s| s.add_cylinder(label, mass_kg, radius_m, height_m, slices, stacks, p, q, thickness_m))?;
+        Ok(self.rigid_object(label, h))
+    }
+
+    /// A solid torus in the body's xy plane.
+    #[pyo3(signature = (label, mass_kg, major_radius_m, minor_radius_m, major_segments=32, minor_segments=16, position_m=None, orientation=None, thickness_m=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn add_torus(
+        &self,
+        label: &str,
+        mass_kg: f64,
+        major_radius_m: f64,
+        minor_radius_m: f64,
+        major_segments: usize,
+        minor_segments: usize,
+        position_m: Option<V3>,
+        orientation: Option<Rot>,
+        thickness_m: Option<f64>,
+    ) -> PyResult<RigidObject> {
+        let (p, q) = pose(position_m, orientation);
+        let h = self.with(|s| {
+            s.add_torus(
+                label,
+                mass_kg,
+                major_radius_m,
+                minor_radius_m,
+                major_segments,
+                minor_segments,
+                p,
+                q,
+                thickness_m,
+            )
+        })?;
+        Ok(self.rigid_object(label, h))
+    }
+
+    /// A body from a closed triangle mesh in world coordinates (n, 3) of uniform
+    /// `density_kg_m3`: its mass properties are integrated and it is placed where the mesh is.
+    #[pyo3(signature = (label, vertices_m, triangles, density_kg_m3, thickness_m=None))]
+    fn add_rigid_mesh(
+        &self,
+        label: &str,
+        vertices_m: Points,
+        triangles: Elements<3>,
+        density_kg_m3: f64,
+        thickness_m: Option<f64>,
+    ) -> PyResult<RigidObject> {
+        let h = self.with(|s| s.add_rigid_mesh(label, &vertices_m.0, &triangles.0, density_kg_m3, thickness_m))?;
+        Ok(self.rigid_object(label, h))
+    }
+
+    /// Give a body a mesh that is only drawn (body frame, relative to its centre of mass): it is
+    /// written to the frames but takes no part in contact. Returns its node set.
+    fn add_rigid_output_mesh(&self, body: BodyArg, vertices: Points, triangles: Elements<3>) -> PyResult<NodeSet> {
+        let b = self.body(&body)?;
+        let h = self.with(|s| s.add_rigid_output_mesh(b, &vertices.0, &triangles.0))?;
+        Ok(NodeSet::new(self.id(), h))
+    }
+
+    /// Switch contact between all collision meshes of bodies a and b off or on (jointed links
+    /// whose meshes overlap).
+    fn set_bodies_collision(&self, a: BodyArg, b: BodyArg, enabled: bool) -> PyResult<()> {
+        let (a, b) = (self.body(&a)?, self.body(&b)?);
+        self.with(|s| s.set_bodies_collision(a, b, enabled))
+    }
+
+    // ---- Deformable–rigid attachments ----
+
+    /// Glue nodes `points` (local indices) of the deformable object `nodes` to `body` where
+    /// they are now.
+    #[pyo3(signature = (label, body, nodes, points, params=None))]
+    fn attach_to_body(
+        &self,
+        py: Python<'_>,
+        label: &str,
+        body: BodyArg,
+        nodes: NodesArg,
+        points: Indices,
+        params: Option<&Bound<'_, params::AttachmentParams>>,
+    ) -> PyResult<RigidAttachmentHandle> {
+        self.own(&nodes.0)?;
+        let b = self.body(&body)?;
+        let p = attachment_params(py, params)?;
+        let h = self.with(|s| s.attach_to_body(label, b, nodes.0.rust(), &points.0, p))?;
+        Ok(RigidAttachmentHandle::new(self.id(), h))
+    }
+
+    /// Glue every node of `nodes` within `distance_m` of the body's collision mesh `mesh`
+    /// (whose triangles are `mesh_triangles`) to the body. Returns the handle and the number of
+    /// nodes glued.
+    #[pyo3(signature = (label, mesh, mesh_triangles, nodes, distance_m, params=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn attach_to_body_by_distance(
+        &self,
+        py: Python<'_>,
+        label: &str,
+        mesh: RigidMesh,
+        mesh_triangles: Elements<3>,
+        nodes: NodesArg,
+        distance_m: f64,
+        params: Option<&Bound<'_, params::AttachmentParams>>,
+    ) -> PyResult<(RigidAttachmentHandle, usize)> {
+        self.own(&mesh.body)?;
+        self.own(&nodes.0)?;
+        let p = attachment_params(py, params)?;
+        let m = stark::rigidbodies::RigidMeshHandle {
+            body: mesh.body.rust(),
+            nodes: mesh.nodes.rust(),
+            contact: mesh.contact.rust(),
+        };
+        let (h, n) =
+            self.with(|s| s.attach_to_body_by_distance(label, &m, &mesh_triangles.0, nodes.0.rust(), distance_m, p))?;
+        Ok((RigidAttachmentHandle::new(self.id(), h), n))
+    }
+
+    /// Largest gap of a deformable–rigid attachment group at the current positions, m.
+    fn rigid_attachment_gap(&self, attachment: RigidAttachmentHandle) -> PyResult<f64> {
+        self.own(&attachment)?;
+        self.with(|s| s.rigid_bodies.attachments.potential.max_gap_now_m(attachment.rust(), s))
+    }
+}
+
+fn attachment_params(
+    py: Python<'_>,
+    p: Option<&Bound<'_, params::AttachmentParams>>,
+) -> PyResult<stark::deformables::AttachmentParams> {
+    match p {
+        Some(p) => p.borrow().to_rust(py),
+        None => Ok(Default::default()),
+    }
+}
+
+/// Register the classes.
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<Joint>()?;
+    m.add_class::<JointState>()?;
+    m.add_class::<RigidObject>()?;
+    Ok(())
+}
