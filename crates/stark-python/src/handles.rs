@@ -193,7 +193,7 @@ impl Issued for AttachmentHandle {
     }
 }
 
-/// A rigid body. Joints, when added, take bodies like this one.
+/// A rigid body (joints, presets and attachments take it, or a RigidMesh/RigidObject of it).
 #[pyclass(module = "starkrs", frozen, eq, hash, from_py_object)]
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub struct RigidBody {

@@ -689,14 +689,14 @@ impl Simulation {
     }
 
     /// Target pose of a fix joint's body: position (m) of its centre of mass and orientation
-    /// (quaternion (w, x, y, z) or (3, 3) matrix).
+    /// (quaternion (w, x, y, z) or (3, 3) matrix), met at the end of the next step.
     fn set_fixed_transform(&self, joint: Joint, position_m: V3, orientation: Rot) -> PyResult<()> {
         let h = self.joint_arg(&joint)?;
         self.with(|s| s.set_fixed_transform(&h, position_m.0, orientation.0))
     }
 
-    /// Target pose of a fix joint's body: its initial pose moved by `position_m` and turned by
-    /// `angle_deg` about `axis`.
+    /// Target pose of a fix joint's body: centre of mass at `position_m` (m), orientation a
+    /// rotation of `angle_deg` about `axis` (met at the end of the next step).
     fn set_fixed_transform_deg(&self, joint: Joint, position_m: V3, angle_deg: f64, axis: V3) -> PyResult<()> {
         let h = self.joint_arg(&joint)?;
         self.with(|s| s.set_fixed_transform_deg(&h, position_m.0, angle_deg, axis.0))

@@ -339,6 +339,25 @@ class RigidBodyParams:
     def __deepcopy__(self, memo: Any) -> RigidBodyParams: ...
 
 @final
+class JointParams:
+    """Parameters common to the composite joints: the penalty stiffness of their hard
+    constraints and the tolerances they are hardened to."""
+    stiffness: float
+    """Stiffness of the hard constraints, N/m (default: 1e6)."""
+    tolerance_m: float
+    """Tolerance of the point constraints, m (default: 1e-3)."""
+    tolerance_deg: float
+    """Tolerance of the direction constraints, degrees (default: 1)."""
+    def __new__(cls, *, stiffness: float = ..., tolerance_m: float = ..., tolerance_deg: float = ...) -> JointParams:
+        """Defaults of the library, with the given fields replaced."""
+    def to_dict(self) -> dict[str, Any]:
+        """The fields as a plain dict (nested settings as nested dicts)."""
+    def copy(self) -> JointParams:
+        """A deep copy (nested settings are copied too)."""
+    def __copy__(self) -> JointParams: ...
+    def __deepcopy__(self, memo: Any) -> JointParams: ...
+
+@final
 class LineMaterial:
     """Material of a rod or cable: inertia, axial strain and contact thickness."""
     inertia: InertiaParams
@@ -490,7 +509,7 @@ class AttachmentHandle:
 
 @final
 class RigidBody:
-    """A rigid body. Joints, when added, take bodies like this one."""
+    """A rigid body (joints, presets and attachments take it, or a RigidMesh/RigidObject of it)."""
     @property
     def index(self) -> int:
         """Index of the body."""
@@ -510,6 +529,63 @@ class RigidMesh:
     @property
     def contact(self) -> ContactHandle:
         """Its contact object."""
+
+@final
+class RigidAttachmentHandle:
+    """A group of deformable nodes glued to a rigid body (`attach_to_body`)."""
+    @property
+    def index(self) -> int:
+        """Index of the group in its model."""
+
+@final
+class RigidObject:
+    """A rigid body made by a preset (`add_box`, ...): the body and its collision mesh."""
+    @property
+    def body(self) -> RigidBody:
+        """The body."""
+    @property
+    def mesh(self) -> RigidMesh:
+        """Its collision mesh."""
+
+@final
+class Joint:
+    """A joint: returned by the `Simulation.add_*` joint methods and taken by the joint setters
+    and `joint_state`."""
+    @property
+    def label(self) -> str:
+        """Its label."""
+    @property
+    def has_driver(self) -> bool:
+        """Whether it has a driver (motor, press, velocity controller, servo or spring)."""
+    @property
+    def has_coordinate(self) -> bool:
+        """Whether it has a coordinate (a hinge angle or a slider position)."""
+
+@final
+class JointState:
+    """A joint's state at the last accepted step (`Simulation.joint_state`)."""
+    @property
+    def violation_m(self) -> float:
+        """Largest violation of its length constraints, m."""
+    @property
+    def violation_rad(self) -> float:
+        """Largest violation of its angle constraints, rad."""
+    @property
+    def force_on_b_n(self) -> list[float]:
+        """Total force of the joint on body b (world frame), N."""
+    @property
+    def torque_on_b_n_m(self) -> list[float]:
+        """Total torque of the joint on body b about its centre of mass, N·m."""
+    @property
+    def driver_effort(self) -> float:
+        """Its driver's effort: torque (N·m) or force (N) along the driver's axis for motors, presses,
+        velocity controllers and servos (positive when driving b along +axis); a spring's tension (N)."""
+    @property
+    def coordinate(self) -> Optional[float]:
+        """Its coordinate: hinge angle (rad) or slider position (m), or None."""
+    @property
+    def coordinate_rate(self) -> Optional[float]:
+        """Rate of its coordinate, rad/s or m/s, or None."""
 
 @final
 class Surface:
@@ -593,7 +669,7 @@ _HasContact = Union[ContactHandle, Surface, Volume, Line, Obstacle, RigidMesh]
 """A contact object, or any object handle with one."""
 _HasPrescribed = Union[PrescribedHandle, Obstacle]
 """Prescribed positions, or an obstacle."""
-_HasBody = Union[RigidBody, RigidMesh]
+_HasBody = Union[RigidBody, RigidMesh, RigidObject]
 """A rigid body, or its collision mesh."""
 _ModelHandle = Union[
     InertiaHandle,
@@ -943,6 +1019,176 @@ class Simulation:
     def set_body_mass(self, body: _HasBody, mass: float, inertia: ArrayLike) -> None:
         """Change the mass (kg) and body-frame inertia tensor (kg·m², (3, 3)) of a body."""
 
+    # ---- Joints (body a None: the world; points and axes in world coordinates, now) ----
+    def add_ball_joint(
+        self, label: str, a: Optional[_HasBody], b: _HasBody, point_m: _Vector, params: Optional[JointParams] = None
+    ) -> Joint:
+        """Ball joint: body b's point at `point_m` (world, now) stays on a's (or the world's)."""
+    def add_ball_joint_with_cone_limit(
+        self, label: str, a: Optional[_HasBody], b: _HasBody, point_m: _Vector, direction: _Vector, limit_deg: float,
+        params: Optional[JointParams] = None,
+    ) -> Joint:
+        """Ball joint whose `direction` (fixed in both bodies) may tilt by at most `limit_deg`."""
+    def add_point_on_axis_joint(
+        self, label: str, a: Optional[_HasBody], b: _HasBody, point_m: _Vector, axis: _Vector,
+        params: Optional[JointParams] = None,
+    ) -> Joint:
+        """Body b's point at `point_m` stays on the line through it along `axis` fixed in a."""
+    def add_distance_joint(
+        self, label: str, a: Optional[_HasBody], b: _HasBody, point_a_m: _Vector, point_b_m: _Vector,
+        params: Optional[JointParams] = None,
+    ) -> Joint:
+        """The distance between a's point `point_a_m` and b's point `point_b_m` stays what it is now."""
+    def add_distance_limits(
+        self, label: str, a: Optional[_HasBody], b: _HasBody, point_a_m: _Vector, point_b_m: _Vector, min_m: float,
+        max_m: float, params: Optional[JointParams] = None,
+    ) -> Joint:
+        """The distance between the two points stays within `[min_m, max_m]`."""
+    def add_spring(
+        self, label: str, a: Optional[_HasBody], b: _HasBody, point_a_m: _Vector, point_b_m: _Vector,
+        stiffness_n_m: float, damping_n_s_m: float = 0.0, limits_m: Optional[tuple[float, float]] = None,
+        params: Optional[JointParams] = None,
+    ) -> Joint:
+        """Damped spring between the two points (rest length: their distance now), optionally limited."""
+    def add_direction_joint(
+        self, label: str, a: Optional[_HasBody], b: _HasBody, direction: _Vector, params: Optional[JointParams] = None
+    ) -> Joint:
+        """`direction` (world, now) stays the same in both bodies."""
+    def add_angle_limit(
+        self, label: str, a: Optional[_HasBody], b: _HasBody, direction: _Vector, limit_deg: float,
+        params: Optional[JointParams] = None,
+    ) -> Joint:
+        """The angle between `direction` in a and in b stays below `limit_deg`."""
+    def add_fix_joint(self, label: str, body: _HasBody, params: Optional[JointParams] = None) -> Joint:
+        """Fix a body to the world where it is; `set_fixed_transform` then drives it kinematically."""
+    def add_attachment_joint(self, label: str, a: _HasBody, b: _HasBody, params: Optional[JointParams] = None) -> Joint:
+        """Glue body b to body a in their current relative pose."""
+    def add_hinge_joint(
+        self, label: str, a: Optional[_HasBody], b: _HasBody, point_m: _Vector, axis: _Vector,
+        params: Optional[JointParams] = None,
+    ) -> Joint:
+        """Hinge about `axis` through `point_m` (world, now)."""
+    def add_hinge_joint_with_limit(
+        self, label: str, a: Optional[_HasBody], b: _HasBody, point_m: _Vector, axis: _Vector, limit_deg: float,
+        params: Optional[JointParams] = None,
+    ) -> Joint:
+        """Hinge that turns at most `limit_deg` either way from its current angle."""
+    def add_universal_joint(
+        self, label: str, a: Optional[_HasBody], b: _HasBody, point_m: _Vector, axis_a: _Vector, axis_b: _Vector,
+        params: Optional[JointParams] = None,
+    ) -> Joint:
+        """Universal (Cardan) joint at `point_m`: `axis_a` (in a) stays perpendicular to `axis_b` (in b)."""
+    def add_slider_joint(
+        self, label: str, a: Optional[_HasBody], b: _HasBody, point_m: _Vector, axis: _Vector,
+        params: Optional[JointParams] = None,
+    ) -> Joint:
+        """Slider: b moves along `axis` through `point_m` and may turn about it."""
+    def add_prismatic_joint(
+        self, label: str, a: Optional[_HasBody], b: _HasBody, point_m: _Vector, axis: _Vector,
+        params: Optional[JointParams] = None,
+    ) -> Joint:
+        """Prismatic joint: b only translates along `axis`."""
+    def add_prismatic_press(
+        self, label: str, a: Optional[_HasBody], b: _HasBody, point_m: _Vector, axis: _Vector, target_m_s: float,
+        max_force_n: float, delay_m_s: float = 0.01, params: Optional[JointParams] = None,
+    ) -> Joint:
+        """Prismatic press: a prismatic joint driven at `target_m_s` along `axis` with at most `max_force_n`."""
+    def add_motor(
+        self, label: str, a: Optional[_HasBody], b: _HasBody, point_m: _Vector, axis: _Vector, target_rad_s: float,
+        max_torque_n_m: float, delay_rad_s: float = 0.01, params: Optional[JointParams] = None,
+    ) -> Joint:
+        """Motor: a hinge driven at `target_rad_s` about `axis` with at most `max_torque_n_m`."""
+    def add_angular_velocity_controller(
+        self, label: str, a: Optional[_HasBody], b: _HasBody, axis: _Vector, target_rad_s: float,
+        max_torque_n_m: float, delay_rad_s: float = 0.01,
+    ) -> Joint:
+        """Angular velocity controller alone: drives `(ω_b − ω_a)·axis` to `target_rad_s`."""
+    def add_linear_velocity_controller(
+        self, label: str, a: Optional[_HasBody], b: _HasBody, point_m: _Vector, axis: _Vector, target_m_s: float,
+        max_force_n: float, delay_m_s: float = 0.01,
+    ) -> Joint:
+        """Linear velocity controller alone: drives the points' relative velocity along `axis` to `target_m_s`."""
+    def add_hinge_servo(
+        self, label: str, a: Optional[_HasBody], b: _HasBody, point_m: _Vector, axis: _Vector, target_deg: float,
+        max_torque_n_m: float, response_time_s: float, params: Optional[JointParams] = None,
+    ) -> Joint:
+        """Hinge servo: turns to `target_deg` (relative to now) with at most `max_torque_n_m`."""
+    def add_prismatic_servo(
+        self, label: str, a: Optional[_HasBody], b: _HasBody, point_m: _Vector, axis: _Vector, target_m: float,
+        max_force_n: float, response_time_s: float, params: Optional[JointParams] = None,
+    ) -> Joint:
+        """Prismatic servo: moves to `target_m` (relative to now) along `axis` with at most `max_force_n`."""
+    def joints(self) -> list[Joint]:
+        """Every joint made so far, in creation order."""
+    def joint(self, label: str) -> Optional[Joint]:
+        """The joint labelled `label`, or None."""
+    def joint_state(self, joint: Joint) -> JointState:
+        """The joint's state at the last accepted step."""
+    def set_joint_enabled(self, joint: Joint, enabled: bool) -> None:
+        """Switch a joint on or off (off: it exerts nothing)."""
+    def set_joint_stiffness(self, joint: Joint, stiffness: float) -> None:
+        """Stiffness of the joint's hard constraints, N/m."""
+    def set_joint_tolerance(self, joint: Joint, tolerance_m: float, tolerance_deg: float) -> None:
+        """Tolerances the joint is hardened to: m and degrees."""
+    def set_joint_target_velocity(self, joint: Joint, target: float) -> None:
+        """Target velocity of a motor, press or velocity controller: rad/s or m/s."""
+    def set_joint_max_effort(self, joint: Joint, max: float) -> None:
+        """Largest torque (N·m) or force (N) of a motor, press, controller or servo."""
+    def set_servo_target(self, joint: Joint, target: float) -> None:
+        """Target of a servo: degrees for a hinge servo, metres for a prismatic one."""
+    def set_spring(self, joint: Joint, rest_length_m: float, damping_n_s_m: float) -> None:
+        """Rest length (m) and damping (N·s/m) of a spring."""
+    def set_fixed_transform(self, joint: Joint, position_m: _Vector, orientation: _Rotation) -> None:
+        """Target pose of a fix joint's body: centre of mass (m) and orientation."""
+    def set_fixed_transform_deg(self, joint: Joint, position_m: _Vector, angle_deg: float, axis: _Vector) -> None:
+        """Target pose of a fix joint's body: centre of mass at `position_m` (m), orientation a rotation of `angle_deg` about `axis`."""
+
+    # ---- Rigid-body presets, drawn meshes, collisions between bodies ----
+    def add_box(
+        self, label: str, mass_kg: float, size_m: _Vector, position_m: Optional[_Vector] = None,
+        orientation: Optional[_Rotation] = None, thickness_m: Optional[float] = None,
+    ) -> RigidObject:
+        """A solid box of `mass_kg` and side lengths `size_m` with its collision mesh."""
+    def add_sphere(
+        self, label: str, mass_kg: float, radius_m: float, subdivisions: int = 2, position_m: Optional[_Vector] = None,
+        orientation: Optional[_Rotation] = None, thickness_m: Optional[float] = None,
+    ) -> RigidObject:
+        """A solid sphere (icosphere mesh with `subdivisions`)."""
+    def add_cylinder(
+        self, label: str, mass_kg: float, radius_m: float, height_m: float, slices: int = 16, stacks: int = 1,
+        position_m: Optional[_Vector] = None, orientation: Optional[_Rotation] = None,
+        thickness_m: Optional[float] = None,
+    ) -> RigidObject:
+        """A solid cylinder along z."""
+    def add_torus(
+        self, label: str, mass_kg: float, major_radius_m: float, minor_radius_m: float, major_segments: int = 32,
+        minor_segments: int = 16, position_m: Optional[_Vector] = None, orientation: Optional[_Rotation] = None,
+        thickness_m: Optional[float] = None,
+    ) -> RigidObject:
+        """A solid torus in the body's xy plane."""
+    def add_rigid_mesh(
+        self, label: str, vertices_m: _Points, triangles: _Indices, density_kg_m3: float,
+        thickness_m: Optional[float] = None,
+    ) -> RigidObject:
+        """A body from a closed triangle mesh in world coordinates of uniform density, placed where the mesh is."""
+    def add_rigid_output_mesh(self, body: _HasBody, vertices: _Points, triangles: _Indices) -> NodeSet:
+        """Give a body a mesh that is only drawn (body frame); returns its node set."""
+    def set_bodies_collision(self, a: _HasBody, b: _HasBody, enabled: bool) -> None:
+        """Switch contact between all collision meshes of bodies a and b off or on."""
+
+    # ---- Deformable–rigid attachments ----
+    def attach_to_body(
+        self, label: str, body: _HasBody, nodes: _HasNodes, points: _Indices, params: Optional[AttachmentParams] = None
+    ) -> RigidAttachmentHandle:
+        """Glue nodes `points` (local indices) of a deformable object to `body` where they are now."""
+    def attach_to_body_by_distance(
+        self, label: str, mesh: RigidMesh, mesh_triangles: _Indices, nodes: _HasNodes, distance_m: float,
+        params: Optional[AttachmentParams] = None,
+    ) -> tuple[RigidAttachmentHandle, int]:
+        """Glue every node within `distance_m` of the body's collision mesh to the body; returns the handle and the count."""
+    def rigid_attachment_gap(self, attachment: RigidAttachmentHandle) -> float:
+        """Largest gap of a deformable–rigid attachment group at the current positions, m."""
+
 # ------------------------------------------------------------------------------------------
 # Scenes
 # ------------------------------------------------------------------------------------------
@@ -960,7 +1206,7 @@ class Scene:
     def name(self) -> str:
         """Scene name."""
     @property
-    def objects(self) -> dict[str, Union[Surface, Volume, Line, Obstacle]]:
+    def objects(self) -> dict[str, Union[Surface, Volume, Line, Obstacle, RigidBody]]:
         """The objects by name (scene files only)."""
     @property
     def prescribed(self) -> list[dict[str, Any]]:
@@ -968,6 +1214,9 @@ class Scene:
     @property
     def attachments(self) -> dict[str, AttachmentHandle]:
         """The `[[attachment]]` entries by label."""
+    @property
+    def joints(self) -> dict[str, Joint]:
+        """The joints by label: the `[[joint]]` entries and the fix joints of fixed bodies (`<body>.fixed`)."""
     def run(self, duration: Optional[float] = None, callback: Optional[Callable[[Simulation], Any]] = None) -> _Report:
         """Run the scene for `duration` seconds (default: its own duration); returns the run summary."""
 
