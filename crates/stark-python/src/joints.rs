@@ -7,7 +7,7 @@
 use crate::convert::{Elements, Indices, Points, Rot, V3};
 use crate::handles::*;
 use crate::params::{self, Mirror};
-use crate::simulation::Simulation;
+use crate::simulation::{attachment_params_arg, Simulation};
 use nalgebra::{UnitQuaternion, Vector3};
 use pyo3::prelude::*;
 use stark::rigidbodies::joints::{JointHandle, DEFAULT_CONTROLLER_DELAY};
@@ -837,7 +837,7 @@ impl Simulation {
     ) -> PyResult<RigidAttachmentHandle> {
         self.own(&nodes.0)?;
         let b = self.body(&body)?;
-        let p = attachment_params(py, params)?;
+        let p = attachment_params_arg(py, params)?;
         let h = self.with(|s| s.attach_to_body(label, b, nodes.0.rust(), &points.0, p))?;
         Ok(RigidAttachmentHandle::new(self.id(), h))
     }
@@ -859,7 +859,7 @@ impl Simulation {
     ) -> PyResult<(RigidAttachmentHandle, usize)> {
         self.own(&mesh.body)?;
         self.own(&nodes.0)?;
-        let p = attachment_params(py, params)?;
+        let p = attachment_params_arg(py, params)?;
         let m = stark::rigidbodies::RigidMeshHandle {
             body: mesh.body.rust(),
             nodes: mesh.nodes.rust(),
@@ -874,16 +874,6 @@ impl Simulation {
     fn rigid_attachment_gap(&self, attachment: RigidAttachmentHandle) -> PyResult<f64> {
         self.own(&attachment)?;
         self.with(|s| s.rigid_bodies.attachments.potential.max_gap_now_m(attachment.rust(), s))
-    }
-}
-
-fn attachment_params(
-    py: Python<'_>,
-    p: Option<&Bound<'_, params::AttachmentParams>>,
-) -> PyResult<stark::deformables::AttachmentParams> {
-    match p {
-        Some(p) => p.borrow().to_rust(py),
-        None => Ok(Default::default()),
     }
 }
 

@@ -1445,7 +1445,7 @@ fn prescribed_params(
     }
 }
 
-fn attachment_params_arg(
+pub(crate) fn attachment_params_arg(
     py: Python<'_>,
     p: Option<&Bound<'_, params::AttachmentParams>>,
 ) -> PyResult<stark::deformables::AttachmentParams> {
