@@ -749,8 +749,9 @@ impl Simulation {
     // -----------------------------------------------------------------------------------------
 
     /// The parameters of a handle: InertiaParams, TriangleStrainParams, TetStrainParams,
-    /// SegmentStrainParams, FlatBendingParams, DihedralBendingParams, PrescribedParams or
-    /// RigidBodyParams (a copy: change it and `set_params` it back).
+    /// SegmentStrainParams, FlatBendingParams, DihedralBendingParams, PrescribedParams,
+    /// RigidBodyParams or AttachmentParams (of an AttachmentHandle or RigidAttachmentHandle); a
+    /// copy: change it and `set_params` it back.
     fn params<'py>(&self, py: Python<'py>, handle: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
         macro_rules! try_get {
             ($h:ty, $p:ty, $get:expr) => {
@@ -806,6 +807,21 @@ impl Simulation {
             RigidBody,
             params::RigidBodyParams,
             |s: &mut stark::Simulation, h: &RigidBody| s.body_params(h.rust())
+        );
+        try_get!(
+            AttachmentHandle,
+            params::AttachmentParams,
+            |s: &mut stark::Simulation, h: &AttachmentHandle| s.deformables.attachments.params(h.handle).cloned()
+        );
+        try_get!(
+            RigidAttachmentHandle,
+            params::AttachmentParams,
+            |s: &mut stark::Simulation, h: &RigidAttachmentHandle| s
+                .rigid_bodies
+                .attachments
+                .potential
+                .params(h.rust())
+                .cloned()
         );
         Err(PyTypeError::new_err(format!(
             "params() takes a model handle (InertiaHandle, TriangleStrainHandle, ..., RigidBody), got {}",
@@ -891,6 +907,23 @@ impl Simulation {
             params::RigidBodyParams,
             |s: &mut stark::Simulation, h: &RigidBody, p: stark::rigidbodies::RigidBodyParams| s
                 .set_body_params(h.rust(), p)
+        );
+        try_set!(
+            AttachmentHandle,
+            params::AttachmentParams,
+            |s: &mut stark::Simulation, h: &AttachmentHandle, p: d::AttachmentParams| s
+                .deformables
+                .attachments
+                .set_params(h.handle, p)
+        );
+        try_set!(
+            RigidAttachmentHandle,
+            params::AttachmentParams,
+            |s: &mut stark::Simulation, h: &RigidAttachmentHandle, p: d::AttachmentParams| s
+                .rigid_bodies
+                .attachments
+                .potential
+                .set_params(h.rust(), p)
         );
         Err(PyTypeError::new_err(format!(
             "set_params() takes a model handle (InertiaHandle, TriangleStrainHandle, ..., RigidBody), got {}",

@@ -250,3 +250,21 @@ def test_bad_joint_input(settings):
     joint = other.add_ball_joint("b", None, foreign, [0, 0, 0])
     with pytest.raises(starkrs.InvalidHandleError):
         sim.joint_state(joint)
+
+
+def test_attachment_parameters_read_and_written(settings):
+    sim = starkrs.Simulation(settings)
+    bar = sim.add_rigid_body_with("bar", starkrs.MassProperties.cuboid(1.0, [0.5, 0.02, 0.02]), [0, 0, 0])
+    cloth = sim.add_surface_grid("cloth", [0.5, 0.5], [2, 2], starkrs.SurfaceMaterial.cotton_fabric())
+    glue = sim.attach_to_body("glue", bar, cloth, [0, 1], starkrs.AttachmentParams(stiffness=1e5))
+    assert sim.params(glue).stiffness == 1e5
+    p = sim.params(glue)
+    p.stiffness = 2e5
+    sim.set_params(glue, p)
+    assert sim.params(glue).stiffness == 2e5
+    knot = sim.add_attachment_point_point("knot", cloth, [0], cloth, [1])
+    assert sim.params(knot).stiffness == starkrs.AttachmentParams().stiffness
+    q = sim.params(knot)
+    q.stiffness = -1.0
+    with pytest.raises(starkrs.StarkError, match="stiffness"):
+        sim.set_params(knot, q)

@@ -680,6 +680,8 @@ _ModelHandle = Union[
     DihedralBendingHandle,
     PrescribedHandle,
     RigidBody,
+    AttachmentHandle,
+    RigidAttachmentHandle,
 ]
 """A handle whose parameters `Simulation.params` reads and `Simulation.set_params` writes."""
 _ModelParams = Union[
@@ -691,6 +693,7 @@ _ModelParams = Union[
     DihedralBendingParams,
     PrescribedParams,
     RigidBodyParams,
+    AttachmentParams,
 ]
 """The parameters matching a `_ModelHandle`."""
 
@@ -881,6 +884,8 @@ class Simulation:
     def params(self, handle: PrescribedHandle) -> PrescribedParams: ...
     @overload
     def params(self, handle: RigidBody) -> RigidBodyParams: ...
+    @overload
+    def params(self, handle: Union[AttachmentHandle, RigidAttachmentHandle]) -> AttachmentParams: ...
     def set_params(self, handle: _ModelHandle, params: _ModelParams) -> None:
         """Replace the parameters of a handle (checked: raises StarkError naming the field)."""
 

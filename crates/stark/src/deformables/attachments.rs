@@ -357,6 +357,25 @@ impl Attachments {
         ))
     }
 
+    /// Parameters of a group.
+    pub fn params(&self, h: AttachmentHandle) -> Result<&AttachmentParams> {
+        match h {
+            AttachmentHandle::PointPoint(g) => self.point_point.groups.get("attachment", g),
+            AttachmentHandle::PointEdge(g) => self.point_edge.groups.get("attachment", g),
+            AttachmentHandle::PointTriangle(g) => self.point_triangle.groups.get("attachment", g),
+        }
+    }
+
+    /// Change the parameters of a group (stiffness, tolerance).
+    pub fn set_params(&mut self, h: AttachmentHandle, params: AttachmentParams) -> Result<()> {
+        let validate = |p: &AttachmentParams, label: &str| p.validate(label);
+        match h {
+            AttachmentHandle::PointPoint(g) => self.point_point.groups.set("attachment", g, params, validate),
+            AttachmentHandle::PointEdge(g) => self.point_edge.groups.set("attachment", g, params, validate),
+            AttachmentHandle::PointTriangle(g) => self.point_triangle.groups.set("attachment", g, params, validate),
+        }
+    }
+
     /// Largest gap of a group at positions `x`, m.
     pub fn max_gap_m(&self, h: AttachmentHandle, x: &[nalgebra::Vector3<f64>]) -> Result<f64> {
         fn worst<const N: usize>(s: &AttachmentSet<N>, g: u32, x: &[nalgebra::Vector3<f64>]) -> Result<f64> {

@@ -64,6 +64,12 @@ impl RigidAttachmentSet {
     pub fn params(&self, h: RigidAttachmentHandle) -> Result<&AttachmentParams> {
         self.groups.get("rigid attachment", h.0)
     }
+
+    /// Change the parameters of a group (stiffness, tolerance).
+    pub fn set_params(&mut self, h: RigidAttachmentHandle, params: AttachmentParams) -> Result<()> {
+        self.groups
+            .set("rigid attachment", h.0, params, |p, label| p.validate(label))
+    }
 }
 
 impl Potential<2> for RigidAttachmentSet {
