@@ -193,7 +193,8 @@ impl Issued for AttachmentHandle {
     }
 }
 
-/// A rigid body (joints, presets and attachments take it, or a RigidMesh/RigidObject of it).
+/// A rigid body (joints, presets and attachments take it, or a RigidMesh, RigidObject or
+/// SceneRigidBody of it).
 #[pyclass(module = "starkrs", frozen, eq, hash, from_py_object)]
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub struct RigidBody {
@@ -392,6 +393,43 @@ impl Obstacle {
     }
 }
 
+/// A `[[rigid_body]]` of a scene file: the body, the nodes of its mesh and its contact object.
+/// Functions taking a body, a node set or a contact object take it too.
+#[pyclass(module = "starkrs", frozen, get_all)]
+pub struct SceneRigidBody {
+    /// Its label (the entry's name).
+    pub label: String,
+    /// The body.
+    pub body: RigidBody,
+    /// The vertices of its mesh (they move with the body).
+    pub nodes: NodeSet,
+    /// Its contact object, if it takes part in contact.
+    pub contact: Option<ContactHandle>,
+}
+
+#[pymethods]
+impl SceneRigidBody {
+    fn __repr__(&self) -> String {
+        format!("SceneRigidBody('{}', nodes={})", self.label, self.nodes.len)
+    }
+}
+
+impl SceneRigidBody {
+    /// Wrap the library's handles.
+    pub fn new(sim: u64, label: &str, h: &stark::io::scene::SceneRigidBody) -> Self {
+        SceneRigidBody {
+            label: label.to_string(),
+            body: RigidBody {
+                index: h.body.index,
+                label: label.to_string(),
+                sim,
+            },
+            nodes: NodeSet::new(sim, h.nodes),
+            contact: h.contact.map(|c| ContactHandle::new(sim, c)),
+        }
+    }
+}
+
 /// Read attribute `name` of `obj` as a `T`, for arguments given as an object handle.
 fn member<'py, T: pyo3::PyClass<Frozen = pyo3::pyclass::boolean_struct::True> + Sync + Clone>(
     obj: &Bound<'py, PyAny>,
@@ -463,7 +501,7 @@ impl<'a, 'py> FromPyObject<'a, 'py> for BodyArg {
         if let Ok(h) = obj.cast::<RigidBody>() {
             return Ok(BodyArg(h.get().clone()));
         }
-        member::<RigidBody>(&obj.to_owned(), "body", "a RigidBody or a RigidMesh").map(BodyArg)
+        member::<RigidBody>(&obj.to_owned(), "body", "a RigidBody or an object with a body").map(BodyArg)
     }
 }
 
@@ -486,5 +524,6 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Volume>()?;
     m.add_class::<Line>()?;
     m.add_class::<Obstacle>()?;
+    m.add_class::<SceneRigidBody>()?;
     Ok(())
 }

@@ -4,13 +4,14 @@
 //!
 //! Argument names are the library's (units in the names). Body `a` may be `None`: the world.
 
-use crate::convert::{Elements, Indices, Points, Rot, V3};
+use crate::convert::{to_python, Elements, Indices, Points, Rot, V3};
 use crate::handles::*;
 use crate::params::{self, Mirror};
 use crate::simulation::{attachment_params_arg, Simulation};
 use nalgebra::{UnitQuaternion, Vector3};
 use pyo3::prelude::*;
-use stark::rigidbodies::joints::{JointHandle, DEFAULT_CONTROLLER_DELAY};
+use pyo3::types::PyDict;
+use stark::rigidbodies::joints::{JointHandle, JointReadout, Primitive, DEFAULT_CONTROLLER_DELAY};
 use stark::rigidbodies::RigidBodyHandle;
 
 /// A joint: returned by the `Simulation.add_*` joint methods and taken by the joint setters
@@ -41,6 +42,17 @@ impl Joint {
     #[getter]
     fn has_coordinate(&self) -> bool {
         self.handle.measure.is_some()
+    }
+}
+
+impl Joint {
+    /// Wrap a library handle issued by simulation `sim`.
+    pub fn new(sim: u64, handle: JointHandle) -> Self {
+        Joint {
+            label: handle.label.clone(),
+            handle,
+            sim,
+        }
     }
 }
 
@@ -75,10 +87,19 @@ pub struct JointState {
 impl JointState {
     fn __repr__(&self) -> String {
         format!(
-            "JointState(coordinate={:?}, coordinate_rate={:?}, driver_effort={}, violation_m={:.3e}, violation_rad={:.3e})",
-            self.coordinate, self.coordinate_rate, self.driver_effort, self.violation_m, self.violation_rad
+            "JointState(coordinate={}, coordinate_rate={}, driver_effort={}, violation_m={:.3e}, violation_rad={:.3e})",
+            py_optional(self.coordinate),
+            py_optional(self.coordinate_rate),
+            self.driver_effort,
+            self.violation_m,
+            self.violation_rad
         )
     }
+}
+
+/// An optional number as Python writes it (`None` or the number).
+fn py_optional(x: Option<f64>) -> String {
+    x.map_or_else(|| "None".to_string(), |x| x.to_string())
 }
 
 impl From<stark::rigidbodies::joints::JointState> for JointState {
@@ -128,11 +149,7 @@ impl Simulation {
     }
 
     fn joint_out(&self, h: JointHandle) -> Joint {
-        Joint {
-            label: h.label.clone(),
-            handle: h,
-            sim: self.id(),
-        }
+        Joint::new(self.id(), h)
     }
 
     /// A joint from `a` (or the world) and `b` made by `f`.
@@ -644,6 +661,50 @@ impl Simulation {
     fn joint_state(&self, joint: Joint) -> PyResult<JointState> {
         let h = self.joint_arg(&joint)?;
         Ok(self.get(|s| s.joint_state(&h))?.into())
+    }
+
+    /// The state of every joint at the last accepted step, by label (a repeated label gets `#2`,
+    /// `#3`, ... as in the joint log).
+    fn joint_states<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let states = self.get(|s| s.joint_states())?;
+        let d = PyDict::new(py);
+        for (label, state) in states {
+            d.set_item(label, JointState::from(state))?;
+        }
+        Ok(d)
+    }
+
+    /// Largest violation of any enabled hard joint constraint at the last accepted step:
+    /// (m, rad).
+    fn max_joint_violations(&self) -> PyResult<(f64, f64)> {
+        self.get(|s| s.max_joint_violations())
+    }
+
+    /// Each primitive of a joint at the last accepted step, in the order the joint is built of
+    /// them: dicts with `primitive` (its `kind` and parameters, e.g. `{"kind": "distance",
+    /// "target_m": 0.2}`), `violation` (m, or rad for angular primitives), and the forces (N,
+    /// world frame) and torques (N·m, about each body's centre of mass) on the two bodies:
+    /// `force_a_n`, `torque_a_n_m`, `force_b_n`, `torque_b_n_m`.
+    fn joint_primitive_readouts<'py>(&self, py: Python<'py>, joint: Joint) -> PyResult<Bound<'py, PyAny>> {
+        #[derive(serde::Serialize)]
+        struct Row {
+            primitive: Primitive,
+            #[serde(flatten)]
+            readout: JointReadout,
+        }
+        let h = self.joint_arg(&joint)?;
+        let rows: Vec<Row> = self
+            .get(|s| s.joint_primitive_readouts(&h))?
+            .into_iter()
+            .map(|(primitive, readout)| Row { primitive, readout })
+            .collect();
+        to_python(py, &rows)
+    }
+
+    /// Largest stiffness of the joint's hard constraints (after hardening), N/m.
+    fn joint_stiffness(&self, joint: Joint) -> PyResult<f64> {
+        let h = self.joint_arg(&joint)?;
+        self.get(|s| s.joint_stiffness(&h))
     }
 
     /// Switch a joint on or off (off: it exerts nothing).

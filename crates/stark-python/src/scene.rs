@@ -1,11 +1,13 @@
 //! Scene files and built-in scenes.
 
 use crate::convert::{guarded, stark_err};
-use crate::handles::{AttachmentHandle, Line, Obstacle, PrescribedHandle, Surface, Volume};
+use crate::handles::{AttachmentHandle, Line, Obstacle, PrescribedHandle, SceneRigidBody, Surface, Volume};
+use crate::joints::Joint;
 use crate::params;
 use crate::simulation::Simulation;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
+use stark::rigidbodies::joints::JointHandle;
 use std::path::PathBuf;
 
 /// A simulation built from a scene file or a built-in scene, ready to `run(duration_s)`.
@@ -17,7 +19,8 @@ pub struct Scene {
     pub duration_s: f64,
     /// Scene name.
     pub name: String,
-    /// The objects by name: Surface, Volume, Line, Obstacle or RigidBody handles (scene files only).
+    /// The objects by name: Surface, Volume, Line, Obstacle or SceneRigidBody handles (scene files
+    /// only).
     pub objects: Py<PyDict>,
     /// The `[[prescribed]]` entries in file order: dicts with `object`, `handle` and `nodes`.
     pub prescribed: Py<PyList>,
@@ -68,6 +71,15 @@ fn configure(
     }
 }
 
+/// The joints of simulation `sim` as a dict by label.
+fn joints_by_label(py: Python<'_>, sim: u64, joints: Vec<JointHandle>) -> PyResult<Bound<'_, PyDict>> {
+    let d = PyDict::new(py);
+    for h in joints {
+        d.set_item(h.label.clone(), Joint::new(sim, h))?;
+    }
+    Ok(d)
+}
+
 fn wrap(py: Python<'_>, scene: stark::io::LoadedScene) -> PyResult<Scene> {
     let sim = Simulation::wrap(scene.simulation);
     let id = sim.id();
@@ -79,15 +91,7 @@ fn wrap(py: Python<'_>, scene: stark::io::LoadedScene) -> PyResult<Scene> {
             O::Volume(h) => Bound::new(py, Volume::new(id, name, h))?.into_any(),
             O::Line(h) => Bound::new(py, Line::new(id, name, h))?.into_any(),
             O::Obstacle(h) => Bound::new(py, Obstacle::new(id, name, h))?.into_any(),
-            O::RigidBody(b) => Bound::new(
-                py,
-                crate::handles::RigidBody {
-                    index: b.body.index,
-                    label: name.clone(),
-                    sim: id,
-                },
-            )?
-            .into_any(),
+            O::RigidBody(b) => Bound::new(py, SceneRigidBody::new(id, name, b))?.into_any(),
         };
         objects.set_item(name, handle)?;
     }
@@ -103,17 +107,7 @@ fn wrap(py: Python<'_>, scene: stark::io::LoadedScene) -> PyResult<Scene> {
     for (label, h) in &scene.attachments {
         attachments.set_item(label, AttachmentHandle { handle: *h, sim: id })?;
     }
-    let joints = PyDict::new(py);
-    for h in &scene.joints {
-        joints.set_item(
-            &h.label,
-            crate::joints::Joint {
-                label: h.label.clone(),
-                handle: h.clone(),
-                sim: id,
-            },
-        )?;
-    }
+    let joints = joints_by_label(py, id, scene.joints)?;
     Ok(Scene {
         simulation: Py::new(py, sim)?,
         duration_s: scene.duration_s,
@@ -193,16 +187,7 @@ fn builtin_scene(py: Python<'_>, name: &str, settings: Option<&Bound<'_, params:
     let name = sim.settings.name.clone();
     let named_joints = sim.rigid_bodies.named_joints.clone();
     let simulation = Simulation::wrap(sim);
-    let joints = PyDict::new(py);
-    for h in named_joints {
-        let label = h.label.clone();
-        let joint = crate::joints::Joint {
-            label: label.clone(),
-            handle: h,
-            sim: simulation.id(),
-        };
-        joints.set_item(label, joint)?;
-    }
+    let joints = joints_by_label(py, simulation.id(), named_joints)?;
     Ok(Scene {
         simulation: Py::new(py, simulation)?,
         duration_s: scene.duration_s,

@@ -22,6 +22,7 @@ use crate::rigid::MassProperties;
 use nalgebra::{UnitQuaternion, Vector3};
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
+use pyo3::types::PyDict;
 use pyo3::PyTraverseError;
 use pyo3::PyVisit;
 use std::cell::RefCell;
@@ -1380,6 +1381,24 @@ impl Simulation {
     fn set_body_angular_acceleration(&self, body: BodyArg, angular_acceleration: V3) -> PyResult<()> {
         let b = self.body(&body)?;
         self.with(|s| s.set_body_angular_acceleration(b, angular_acceleration.0))
+    }
+
+    /// Every body's pose and velocity by label: dicts with `position_m`, `orientation_wxyz`,
+    /// `velocity_m_s` and `angular_velocity_rad_s` (world frame), as in the body log.
+    fn body_states<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let states = self.get(|s| s.body_states())?;
+        let d = PyDict::new(py);
+        for (label, state) in states {
+            d.set_item(label, to_python(py, &state)?)?;
+        }
+        Ok(d)
+    }
+
+    /// The contact objects of a body's collision meshes, in the order they were added.
+    fn body_collision_meshes(&self, body: BodyArg) -> PyResult<Vec<ContactHandle>> {
+        let b = self.body(&body)?;
+        let hs = self.with(|s| s.body_collision_meshes(b).map(|c| c.to_vec()))?;
+        Ok(hs.into_iter().map(|c| ContactHandle::new(self.id, c)).collect())
     }
 
     /// Change the mass (kg) and body-frame inertia tensor (kg·m², (3, 3)) of a body.

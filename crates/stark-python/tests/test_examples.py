@@ -1,4 +1,4 @@
-"""Every example runs (briefly) and the README's Python example runs as written."""
+"""Every example runs (briefly) and the README's Python examples run as written."""
 
 import importlib.util
 import os
@@ -35,10 +35,16 @@ def test_example_runs(path, tmp_path, capsys):
     assert sim.find_intersections() == []
 
 
-def test_readme_python_example_runs_as_written(tmp_path, monkeypatch):
+def test_readme_python_examples_run_as_written(tmp_path, monkeypatch):
+    # The Python section's snippets, in order, in one namespace (the joint one continues the first).
     readme = (REPO / "README.md").read_text()
     section = readme[readme.index("## Python"):]
-    code = re.search(r"```python\n(.*?)```", section, re.S).group(1)
+    section = section[:section.index("\n## ", 1)]
+    snippets = re.findall(r"```python\n(.*?)```", section, re.S)
+    assert len(snippets) == 2
     monkeypatch.chdir(tmp_path)
-    exec(compile(code, "README.md", "exec"), {"__name__": "__main__"})
+    namespace = {"__name__": "__main__"}
+    for code in snippets:
+        exec(compile(code, "README.md", "exec"), namespace)
     assert Path("output").exists()
+    assert namespace["sim"].joint_state(namespace["motor"]).coordinate == pytest.approx(0.5, rel=0.02)

@@ -158,6 +158,44 @@ def test_joints_are_listed_and_switched(settings):
     assert len(sim.joints()) == 3 + len(made)
 
 
+def test_primitive_readouts_add_up_to_the_joint_state(settings):
+    # A 0.5 kg rod hanging at rest from a hinge: the hinge's point primitive carries m g, its
+    # direction primitive nothing, and the per-primitive readouts sum to the joint's state.
+    settings.time_step_s = 0.01
+    sim = starkrs.Simulation(settings)
+    m, g = 0.5, 9.81
+    rod_body = sim.add_rigid_body_with("rod", starkrs.MassProperties.cuboid(m, [0.02, 0.02, 0.2]), [0, 0, -0.1])
+    hinge = sim.add_hinge_joint("pivot", None, rod_body, [0, 0, 0], [0, 1, 0])
+    assert sim.joint_stiffness(hinge) == starkrs.JointParams().stiffness
+    sim.run(0.5)
+    rows = sim.joint_primitive_readouts(hinge)
+    assert [r["primitive"]["kind"] for r in rows] == ["point", "direction"]
+    np.testing.assert_allclose(rows[0]["force_b_n"], [0.0, 0.0, m * g], rtol=1e-6, atol=1e-9)
+    np.testing.assert_allclose(rows[0]["force_a_n"], [0.0, 0.0, 0.0])  # a is the world
+    state = sim.joint_state(hinge)
+    np.testing.assert_allclose(state.force_on_b_n, np.sum([r["force_b_n"] for r in rows], axis=0), atol=1e-12)
+    np.testing.assert_allclose(state.torque_on_b_n_m, np.sum([r["torque_b_n_m"] for r in rows], axis=0), atol=1e-12)
+    assert state.violation_m == rows[0]["violation"] == pytest.approx(m * g / sim.joint_stiffness(hinge), rel=1e-3)
+    assert "coordinate=0" in repr(state) and "Some" not in repr(state)
+    # Every joint at once, and the worst violations.
+    spring = sim.add_spring("spring", None, rod_body, [0, 0, 0.1], [0, 0, -0.2], 10.0)
+    sim.step()
+    states = sim.joint_states()
+    assert list(states) == ["pivot", "spring"]
+    assert states["pivot"].coordinate == sim.joint_state(hinge).coordinate
+    assert states["spring"].driver_effort == sim.joint_state(spring).driver_effort
+    assert sim.max_joint_violations() == (states["pivot"].violation_m, states["pivot"].violation_rad)
+    spring_rows = sim.joint_primitive_readouts(spring)
+    assert spring_rows[0]["primitive"] == {"kind": "spring", "rest_length_m": pytest.approx(0.3), "damping_n_s_m": 0.0}
+    sim.set_joint_stiffness(hinge, 2e7)
+    assert sim.joint_stiffness(hinge) == 2e7
+    # Body states, as in the body log.
+    body = sim.body_states()["rod"]
+    np.testing.assert_array_equal(body["position_m"], sim.body_position(rod_body))
+    np.testing.assert_array_equal(body["orientation_wxyz"], sim.body_orientation(rod_body))
+    np.testing.assert_array_equal(body["angular_velocity_rad_s"], sim.body_angular_velocity(rod_body))
+
+
 def test_fix_joint_drives_a_body_kinematically(settings):
     settings.time_step_s = 0.01
     sim = starkrs.Simulation(settings)
@@ -193,6 +231,8 @@ def test_presets_have_the_textbook_mass_properties(settings):
     np.testing.assert_allclose(sim.body_position(cube.body), [4.0, 0.0, 1.0], atol=1e-12)
     nodes = sim.add_rigid_output_mesh(box.body, v, t)
     assert sim.positions(nodes).shape == (8, 3)
+    assert sim.body_collision_meshes(box) == [box.mesh.contact]
+    assert sim.body_collision_meshes(cube.body) == [cube.mesh.contact]
     with pytest.raises(starkrs.StarkError, match="mass_kg"):
         sim.add_box("bad", -1.0, [0.1] * 3)
 
@@ -225,9 +265,18 @@ def test_attach_to_body_carries_a_cloth(settings):
 def test_scene_file_joints_from_python(tmp_path):
     scene = starkrs.load_scene(REPO / "scenes" / "rb_pendulum_chain.toml", output_directory=str(tmp_path), frames=False)
     assert "motor" in scene.joints and "hinge4" in scene.joints
-    assert isinstance(scene.objects["wheel"], starkrs.RigidBody)
+    wheel = scene.objects["wheel"]
+    assert isinstance(wheel, starkrs.SceneRigidBody) and wheel.label == "wheel"
     sim = scene.simulation
+    assert wheel.body == sim.rigid_body("wheel") and wheel.contact is None  # no contact thickness
+    assert sim.positions(wheel).shape == (len(wheel.nodes), 3)
+    local_at_start = sim.body_point_to_local(wheel, sim.positions(wheel))
+    q_at_start = sim.body_orientation(wheel)
     sim.run(0.5)
+    assert list(sim.joint_states()) == list(scene.joints)
+    # The wheel's drawn mesh turns with it: its vertices keep their body-frame coordinates.
+    assert np.abs(sim.positions(wheel) - sim.body_point_to_world(wheel, local_at_start)).max() < 1e-12
+    assert abs(sim.body_orientation(wheel) @ q_at_start) == pytest.approx(math.cos(math.radians(45.0) / 2), abs=1e-2)
     motor = sim.joint_state(scene.joints["motor"])
     assert motor.coordinate_rate == pytest.approx(math.radians(90.0), rel=1e-2)
     for label, joint in scene.joints.items():
@@ -250,6 +299,12 @@ def test_bad_joint_input(settings):
     joint = other.add_ball_joint("b", None, foreign, [0, 0, 0])
     with pytest.raises(starkrs.InvalidHandleError):
         sim.joint_state(joint)
+    with pytest.raises(starkrs.InvalidHandleError):
+        sim.joint_primitive_readouts(joint)
+    with pytest.raises(starkrs.InvalidHandleError):
+        sim.body_collision_meshes(foreign)
+    with pytest.raises(TypeError, match="RigidBody"):
+        sim.body_collision_meshes(joint)
 
 
 def test_attachment_parameters_read_and_written(settings):

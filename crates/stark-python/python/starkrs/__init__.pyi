@@ -509,7 +509,8 @@ class AttachmentHandle:
 
 @final
 class RigidBody:
-    """A rigid body (joints, presets and attachments take it, or a RigidMesh/RigidObject of it)."""
+    """A rigid body (joints, presets and attachments take it, or a RigidMesh, RigidObject or
+    SceneRigidBody of it)."""
     @property
     def index(self) -> int:
         """Index of the body."""
@@ -663,14 +664,31 @@ class Obstacle:
     def contact(self) -> ContactHandle:
         """Its contact object."""
 
-_HasNodes = Union[NodeSet, Surface, Volume, Line, Obstacle, RigidMesh]
+@final
+class SceneRigidBody:
+    """A `[[rigid_body]]` of a scene file: the body, the nodes of its mesh and its contact object.
+    Functions taking a body, a node set or a contact object take it too."""
+    @property
+    def label(self) -> str:
+        """Its label (the entry's name)."""
+    @property
+    def body(self) -> RigidBody:
+        """The body."""
+    @property
+    def nodes(self) -> NodeSet:
+        """The vertices of its mesh (they move with the body)."""
+    @property
+    def contact(self) -> Optional[ContactHandle]:
+        """Its contact object, if it takes part in contact."""
+
+_HasNodes = Union[NodeSet, Surface, Volume, Line, Obstacle, RigidMesh, SceneRigidBody]
 """A node set, or any object handle with one."""
-_HasContact = Union[ContactHandle, Surface, Volume, Line, Obstacle, RigidMesh]
+_HasContact = Union[ContactHandle, Surface, Volume, Line, Obstacle, RigidMesh, SceneRigidBody]
 """A contact object, or any object handle with one."""
 _HasPrescribed = Union[PrescribedHandle, Obstacle]
 """Prescribed positions, or an obstacle."""
-_HasBody = Union[RigidBody, RigidMesh, RigidObject]
-"""A rigid body, or its collision mesh."""
+_HasBody = Union[RigidBody, RigidMesh, RigidObject, SceneRigidBody]
+"""A rigid body, or any object handle with one (its collision mesh, a preset's object, a scene's body)."""
 _ModelHandle = Union[
     InertiaHandle,
     TriangleStrainHandle,
@@ -975,6 +993,11 @@ class Simulation:
         """The rigid body labelled `label`, or None."""
     def rigid_bodies(self) -> list[RigidBody]:
         """All rigid bodies, in creation order."""
+    def body_states(self) -> dict[str, dict[str, list[float]]]:
+        """Every body's pose and velocity by label: dicts with `position_m`, `orientation_wxyz`,
+        `velocity_m_s` and `angular_velocity_rad_s` (world frame), as in the body log."""
+    def body_collision_meshes(self, body: _HasBody) -> list[ContactHandle]:
+        """The contact objects of a body's collision meshes, in the order they were added."""
     def body_position(self, body: _HasBody) -> NDArray[np.float64]:
         """Centre of mass of a body, m."""
     def body_orientation(self, body: _HasBody) -> NDArray[np.float64]:
@@ -1129,6 +1152,17 @@ class Simulation:
         """The joint labelled `label`, or None."""
     def joint_state(self, joint: Joint) -> JointState:
         """The joint's state at the last accepted step."""
+    def joint_states(self) -> dict[str, JointState]:
+        """The state of every joint at the last accepted step, by label (a repeated label gets `#2`,
+        `#3`, ... as in the joint log)."""
+    def max_joint_violations(self) -> tuple[float, float]:
+        """Largest violation of any enabled hard joint constraint at the last accepted step: (m, rad)."""
+    def joint_primitive_readouts(self, joint: Joint) -> list[dict[str, Any]]:
+        """Each primitive of a joint at the last accepted step: dicts with `primitive` (its `kind`
+        and parameters), `violation` (m or rad), `force_a_n`, `torque_a_n_m`, `force_b_n` and
+        `torque_b_n_m` (N and N·m, world frame, torques about each body's centre of mass)."""
+    def joint_stiffness(self, joint: Joint) -> float:
+        """Largest stiffness of the joint's hard constraints (after hardening), N/m."""
     def set_joint_enabled(self, joint: Joint, enabled: bool) -> None:
         """Switch a joint on or off (off: it exerts nothing)."""
     def set_joint_stiffness(self, joint: Joint, stiffness: float) -> None:
@@ -1211,7 +1245,7 @@ class Scene:
     def name(self) -> str:
         """Scene name."""
     @property
-    def objects(self) -> dict[str, Union[Surface, Volume, Line, Obstacle, RigidBody]]:
+    def objects(self) -> dict[str, Union[Surface, Volume, Line, Obstacle, SceneRigidBody]]:
         """The objects by name (scene files only)."""
     @property
     def prescribed(self) -> list[dict[str, Any]]:
