@@ -1,5 +1,5 @@
 """A motor-driven crank: a wheel turned by a motor at 90°/s (at most 2 N·m) drives, through a
-ball-jointed rod, a slider on a prismatic joint. Halfway through, a time event reverses the
+hinged connecting rod, a slider on a prismatic joint. Halfway through, a time event reverses the
 motor from Python; the joint readouts (angle, rate, motor torque, slider position) are printed.
 
     python hinge_motor.py                  # 4 s, frames in output/hinge_motor
@@ -53,7 +53,7 @@ def main(argv=None):
     print(f"{summary['steps']} steps, {summary['newton_iterations_per_step']:.1f} Newton iterations per step: "
           f"motor at {math.degrees(m.coordinate):.1f}° turning {math.degrees(m.coordinate_rate):.1f}°/s "
           f"with {m.driver_effort:.3f} N·m, slider at {g.coordinate * 1000:.1f} mm, "
-          f"largest joint violation {max(sim.joint_state(j).violation_m for j in sim.joints()):.1e} m")
+          f"largest joint violation {sim.max_joint_violations()[0]:.1e} m")
     return sim
 
 

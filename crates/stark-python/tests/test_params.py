@@ -23,6 +23,7 @@ CLASSES = [
     starkrs.PrescribedParams,
     starkrs.AttachmentParams,
     starkrs.RigidBodyParams,
+    starkrs.JointParams,
     starkrs.LineMaterial,
     starkrs.VolumeMaterial,
     starkrs.SurfaceMaterial,
