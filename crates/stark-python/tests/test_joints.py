@@ -305,6 +305,26 @@ def test_bad_joint_input(settings):
         sim.body_collision_meshes(foreign)
     with pytest.raises(TypeError, match="RigidBody"):
         sim.body_collision_meshes(joint)
+    # An unknown body: by label there is none to pass; in a scene file it is named.
+    assert sim.rigid_body("ghost") is None
+    with pytest.raises(TypeError, match="RigidBody"):
+        sim.add_hinge_joint("h", None, sim.rigid_body("ghost"), [0, 0, 0], [0, 1, 0])
+    with pytest.raises(starkrs.StarkError, match="mass of rigid body 'neg' must be positive"):
+        sim.add_rigid_body("neg", -1.0, np.eye(3))
+    scene = """duration_s = 1.0
+[[rigid_body]]
+name = "a"
+box = { size_m = [0.1, 0.1, 0.1] }
+mass_kg = 1.0
+[[joint]]
+name = "j"
+type = "hinge"
+b = "ghost"
+point_m = [0.0, 0.0, 0.0]
+axis = [0.0, 1.0, 0.0]
+"""
+    with pytest.raises(starkrs.SceneError, match=r"scene\.toml:\d+:\d+: unknown rigid body 'ghost' in joint 'j'"):
+        starkrs.parse_scene(scene)
 
 
 def test_attachment_parameters_read_and_written(settings):
