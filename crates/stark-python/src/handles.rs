@@ -222,6 +222,14 @@ impl Issued for RigidBody {
 }
 
 impl RigidBody {
+    /// Wrap a library handle issued by simulation `sim`.
+    pub fn new(sim: u64, h: stark::rigidbodies::RigidBodyHandle, label: &str) -> Self {
+        RigidBody {
+            index: h.index,
+            label: label.to_string(),
+            sim,
+        }
+    }
     /// The library handle.
     pub fn rust(&self) -> stark::rigidbodies::RigidBodyHandle {
         stark::rigidbodies::RigidBodyHandle { index: self.index }
@@ -419,11 +427,7 @@ impl SceneRigidBody {
     pub fn new(sim: u64, label: &str, h: &stark::io::scene::SceneRigidBody) -> Self {
         SceneRigidBody {
             label: label.to_string(),
-            body: RigidBody {
-                index: h.body.index,
-                label: label.to_string(),
-                sim,
-            },
+            body: RigidBody::new(sim, h.body, label),
             nodes: NodeSet::new(sim, h.nodes),
             contact: h.contact.map(|c| ContactHandle::new(sim, c)),
         }

@@ -170,11 +170,7 @@ impl Simulation {
     }
 
     fn rigid_object(&self, label: &str, h: stark::presets::RigidHandle) -> RigidObject {
-        let body = RigidBody {
-            index: h.body.index,
-            label: label.to_string(),
-            sim: self.id(),
-        };
+        let body = RigidBody::new(self.id(), h.body, label);
         RigidObject {
             mesh: RigidMesh {
                 body: body.clone(),
@@ -186,7 +182,8 @@ impl Simulation {
     }
 }
 
-fn pose(position_m: Option<V3>, orientation: Option<Rot>) -> (Vector3<f64>, UnitQuaternion<f64>) {
+/// A pose from optional arguments: the origin and no rotation by default.
+pub(crate) fn pose(position_m: Option<V3>, orientation: Option<Rot>) -> (Vector3<f64>, UnitQuaternion<f64>) {
     (
         position_m.map(|p| p.0).unwrap_or_else(Vector3::zeros),
         orientation.map(|q| q.0).unwrap_or_else(UnitQuaternion::identity),
@@ -869,9 +866,14 @@ impl Simulation {
 
     /// Give a body a mesh that is only drawn (body frame, relative to its centre of mass): it is
     /// written to the frames but takes no part in contact. Returns its node set.
-    fn add_rigid_output_mesh(&self, body: BodyArg, vertices: Points, triangles: Elements<3>) -> PyResult<NodeSet> {
+    fn add_rigid_output_mesh(
+        &self,
+        body: BodyArg,
+        local_vertices_m: Points,
+        triangles: Elements<3>,
+    ) -> PyResult<NodeSet> {
         let b = self.body(&body)?;
-        let h = self.with(|s| s.add_rigid_output_mesh(b, &vertices.0, &triangles.0))?;
+        let h = self.with(|s| s.add_rigid_output_mesh(b, &local_vertices_m.0, &triangles.0))?;
         Ok(NodeSet::new(self.id(), h))
     }
 

@@ -48,38 +48,41 @@ impl MassProperties {
         }
     }
 
-    /// Solid box of `mass_kg` with side lengths `size` (m), centred at the origin.
+    /// Solid box of `mass_kg` with side lengths `size_m`, centred at the origin.
     #[staticmethod]
-    fn cuboid(mass_kg: f64, size: V3) -> Self {
-        Self::wrap(stark::rigidbodies::MassProperties::cuboid(mass_kg, size.0))
+    fn cuboid(mass_kg: f64, size_m: V3) -> Self {
+        Self::wrap(stark::rigidbodies::MassProperties::cuboid(mass_kg, size_m.0))
     }
 
-    /// Solid sphere of `mass_kg` and radius `radius` (m).
+    /// Solid sphere of `mass_kg` and radius `radius_m`.
     #[staticmethod]
-    fn sphere(mass_kg: f64, radius: f64) -> Self {
-        Self::wrap(stark::rigidbodies::MassProperties::sphere(mass_kg, radius))
+    fn sphere(mass_kg: f64, radius_m: f64) -> Self {
+        Self::wrap(stark::rigidbodies::MassProperties::sphere(mass_kg, radius_m))
     }
 
-    /// Solid cylinder of `mass_kg`, radius and height (m) along z, centred.
+    /// Solid cylinder of `mass_kg`, `radius_m` and `height_m` along z, centred.
     #[staticmethod]
-    fn cylinder(mass_kg: f64, radius: f64, height: f64) -> Self {
-        Self::wrap(stark::rigidbodies::MassProperties::cylinder(mass_kg, radius, height))
+    fn cylinder(mass_kg: f64, radius_m: f64, height_m: f64) -> Self {
+        Self::wrap(stark::rigidbodies::MassProperties::cylinder(
+            mass_kg, radius_m, height_m,
+        ))
     }
 
-    /// Solid torus in the xy plane: major radius (centre of the tube) and tube radius (m).
+    /// Solid torus in the xy plane: `major_radius_m` (to the centre of the tube) and
+    /// `minor_radius_m` (of the tube).
     #[staticmethod]
-    fn torus(mass_kg: f64, major_radius: f64, minor_radius: f64) -> Self {
+    fn torus(mass_kg: f64, major_radius_m: f64, minor_radius_m: f64) -> Self {
         Self::wrap(stark::rigidbodies::MassProperties::torus(
             mass_kg,
-            major_radius,
-            minor_radius,
+            major_radius_m,
+            minor_radius_m,
         ))
     }
 
     /// A closed, outward-oriented triangle mesh (vertices (n, 3), triangles (m, 3)) of uniform density (kg/m³).
     #[staticmethod]
-    fn from_mesh(vertices: Points, triangles: Elements<3>, density_kg_m3: f64) -> PyResult<Self> {
-        guarded(|| stark::rigidbodies::MassProperties::from_mesh(&vertices.0, &triangles.0, density_kg_m3))
+    fn from_mesh(vertices_m: Points, triangles: Elements<3>, density_kg_m3: f64) -> PyResult<Self> {
+        guarded(|| stark::rigidbodies::MassProperties::from_mesh(&vertices_m.0, &triangles.0, density_kg_m3))
             .map(Self::wrap)
     }
 

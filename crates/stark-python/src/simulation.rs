@@ -17,6 +17,7 @@ use crate::convert::{
     Indices, Points, Rot, M3, V3,
 };
 use crate::handles::*;
+use crate::joints::pose;
 use crate::params::{self, Mirror};
 use crate::rigid::MassProperties;
 use nalgebra::{UnitQuaternion, Vector3};
@@ -1130,60 +1131,51 @@ impl Simulation {
     // Rigid bodies
     // -----------------------------------------------------------------------------------------
 
-    /// Add a rigid body of `mass` (kg) and body-frame inertia tensor `inertia` (3, 3) about its
-    /// centre of mass, placed at `position` (m) with `orientation` (quaternion (w, x, y, z) or
+    /// Add a rigid body of `mass_kg` and body-frame inertia tensor `inertia_kg_m2` (3, 3) about
+    /// its centre of mass, placed at `position_m` with `orientation` (quaternion (w, x, y, z) or
     /// (3, 3) matrix). It starts at rest.
-    #[pyo3(signature = (label, mass, inertia, position=None, orientation=None))]
+    #[pyo3(signature = (label, mass_kg, inertia_kg_m2, position_m=None, orientation=None))]
     fn add_rigid_body(
         &self,
         label: &str,
-        mass: f64,
-        inertia: M3,
-        position: Option<V3>,
+        mass_kg: f64,
+        inertia_kg_m2: M3,
+        position_m: Option<V3>,
         orientation: Option<Rot>,
     ) -> PyResult<RigidBody> {
-        let p = position.map(|p| p.0).unwrap_or_else(Vector3::zeros);
-        let q = orientation.map(|q| q.0).unwrap_or_else(UnitQuaternion::identity);
-        let h = self.with(|s| s.add_rigid_body(label, mass, inertia.0, p, q))?;
-        Ok(RigidBody {
-            index: h.index,
-            label: label.to_string(),
-            sim: self.id,
-        })
+        let (p, q) = pose(position_m, orientation);
+        let h = self.with(|s| s.add_rigid_body(label, mass_kg, inertia_kg_m2.0, p, q))?;
+        Ok(RigidBody::new(self.id, h, label))
     }
 
-    /// Add a rigid body from its mass properties; its centre of mass goes to `position`.
-    #[pyo3(signature = (label, mass_properties, position=None, orientation=None))]
+    /// Add a rigid body from its mass properties; its centre of mass goes to `position_m`.
+    #[pyo3(signature = (label, mass_properties, position_m=None, orientation=None))]
     fn add_rigid_body_with(
         &self,
         label: &str,
         mass_properties: &MassProperties,
-        position: Option<V3>,
+        position_m: Option<V3>,
         orientation: Option<Rot>,
     ) -> PyResult<RigidBody> {
-        let p = position.map(|p| p.0).unwrap_or_else(Vector3::zeros);
-        let q = orientation.map(|q| q.0).unwrap_or_else(UnitQuaternion::identity);
+        let (p, q) = pose(position_m, orientation);
         let props = mass_properties.rust();
         let h = self.with(|s| s.add_rigid_body_with(label, &props, p, q))?;
-        Ok(RigidBody {
-            index: h.index,
-            label: label.to_string(),
-            sim: self.id,
-        })
+        Ok(RigidBody::new(self.id, h, label))
     }
 
     /// Give a body a collision mesh: vertices (n, 3) in the body frame (relative to its centre of
     /// mass) and triangles (m, 3), with contact thickness `thickness_m` (or the default).
-    #[pyo3(signature = (body, vertices, triangles, thickness_m=None))]
+    #[pyo3(signature = (body, local_vertices_m, triangles, thickness_m=None))]
     fn add_rigid_collision_mesh(
         &self,
         body: BodyArg,
-        vertices: Points,
+        local_vertices_m: Points,
         triangles: Elements<3>,
         thickness_m: Option<f64>,
     ) -> PyResult<RigidMesh> {
         self.own(&body.0)?;
-        let h = self.with(|s| s.add_rigid_collision_mesh(body.0.rust(), &vertices.0, &triangles.0, thickness_m))?;
+        let h =
+            self.with(|s| s.add_rigid_collision_mesh(body.0.rust(), &local_vertices_m.0, &triangles.0, thickness_m))?;
         Ok(RigidMesh {
             body: body.0,
             nodes: NodeSet::new(self.id, h.nodes),
@@ -1193,11 +1185,9 @@ impl Simulation {
 
     /// The rigid body labelled `label`, or None.
     fn rigid_body(&self, label: &str) -> PyResult<Option<RigidBody>> {
-        Ok(self.get(|s| s.rigid_bodies.by_label(label))?.map(|h| RigidBody {
-            index: h.index,
-            label: label.to_string(),
-            sim: self.id,
-        }))
+        Ok(self
+            .get(|s| s.rigid_bodies.by_label(label))?
+            .map(|h| RigidBody::new(self.id, h, label)))
     }
 
     /// All rigid bodies, in creation order.
@@ -1280,10 +1270,10 @@ impl Simulation {
         &self,
         py: Python<'py>,
         body: BodyArg,
-        points: &Bound<'py, PyAny>,
+        points_m: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyAny>> {
         let b = self.body(&body)?;
-        self.map_points(py, points, |s, p| s.body_point_to_world(b, p))
+        self.map_points(py, points_m, |s, p| s.body_point_to_world(b, p))
     }
 
     /// Body-frame coordinates of world points: (3,) → (3,), (n, 3) → (n, 3).
@@ -1291,10 +1281,10 @@ impl Simulation {
         &self,
         py: Python<'py>,
         body: BodyArg,
-        points: &Bound<'py, PyAny>,
+        points_m: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyAny>> {
         let b = self.body(&body)?;
-        self.map_points(py, points, |s, p| s.body_point_to_local(b, p))
+        self.map_points(py, points_m, |s, p| s.body_point_to_local(b, p))
     }
 
     /// World directions of body-frame directions: (3,) → (3,), (n, 3) → (n, 3).
@@ -1324,63 +1314,64 @@ impl Simulation {
         &self,
         py: Python<'py>,
         body: BodyArg,
-        points: &Bound<'py, PyAny>,
+        points_m: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyAny>> {
         let b = self.body(&body)?;
-        self.map_points(py, points, |s, p| s.body_velocity_at(b, p))
+        self.map_points(py, points_m, |s, p| s.body_velocity_at(b, p))
     }
 
-    /// Move a body: centre of mass to `position` (m), orientation to `orientation` (its mesh follows).
-    #[pyo3(signature = (body, position, orientation=None))]
-    fn set_body_pose(&self, body: BodyArg, position: V3, orientation: Option<Rot>) -> PyResult<()> {
+    /// Move a body: centre of mass to `position_m`, orientation to `orientation` (default:
+    /// unchanged); its meshes follow.
+    #[pyo3(signature = (body, position_m, orientation=None))]
+    fn set_body_pose(&self, body: BodyArg, position_m: V3, orientation: Option<Rot>) -> PyResult<()> {
         let b = self.body(&body)?;
         self.with(|s| {
             let q = orientation.map(|q| q.0).unwrap_or_else(|| s.body_orientation(b));
-            s.set_body_pose(b, position.0, q)
+            s.set_body_pose(b, position_m.0, q)
         })
     }
 
     /// Set the linear velocity of a body's centre of mass, m/s.
-    fn set_body_velocity(&self, body: BodyArg, velocity: V3) -> PyResult<()> {
+    fn set_body_velocity(&self, body: BodyArg, velocity_m_s: V3) -> PyResult<()> {
         let b = self.body(&body)?;
-        self.with(|s| s.set_body_velocity(b, velocity.0))
+        self.with(|s| s.set_body_velocity(b, velocity_m_s.0))
     }
 
     /// Set the angular velocity of a body (world frame), rad/s.
-    fn set_body_angular_velocity(&self, body: BodyArg, angular_velocity: V3) -> PyResult<()> {
+    fn set_body_angular_velocity(&self, body: BodyArg, angular_velocity_rad_s: V3) -> PyResult<()> {
         let b = self.body(&body)?;
-        self.with(|s| s.set_body_angular_velocity(b, angular_velocity.0))
+        self.with(|s| s.set_body_angular_velocity(b, angular_velocity_rad_s.0))
     }
 
     /// Set the external force at a body's centre of mass (persists until changed), N.
-    fn set_body_force(&self, body: BodyArg, force: V3) -> PyResult<()> {
+    fn set_body_force(&self, body: BodyArg, force_n: V3) -> PyResult<()> {
         let b = self.body(&body)?;
-        self.with(|s| s.set_body_force(b, force.0))
+        self.with(|s| s.set_body_force(b, force_n.0))
     }
 
     /// Set the external torque on a body (persists until changed), N·m.
-    fn set_body_torque(&self, body: BodyArg, torque: V3) -> PyResult<()> {
+    fn set_body_torque(&self, body: BodyArg, torque_n_m: V3) -> PyResult<()> {
         let b = self.body(&body)?;
-        self.with(|s| s.set_body_torque(b, torque.0))
+        self.with(|s| s.set_body_torque(b, torque_n_m.0))
     }
 
-    /// Add a force applied at the world point `at`: a force at the centre of mass plus the
-    /// torque (at − c) × f (persists until changed).
-    fn add_body_force_at(&self, body: BodyArg, force: V3, at: V3) -> PyResult<()> {
+    /// Add a force `force_n` applied at the world point `at_m`: a force at the centre of mass
+    /// plus the torque (at − c) × f (persists until changed).
+    fn add_body_force_at(&self, body: BodyArg, force_n: V3, at_m: V3) -> PyResult<()> {
         let b = self.body(&body)?;
-        self.with(|s| s.add_body_force_at(b, force.0, at.0))
+        self.with(|s| s.add_body_force_at(b, force_n.0, at_m.0))
     }
 
     /// Set the external acceleration of a body (added to gravity; persists), m/s².
-    fn set_body_acceleration(&self, body: BodyArg, acceleration: V3) -> PyResult<()> {
+    fn set_body_acceleration(&self, body: BodyArg, acceleration_m_s2: V3) -> PyResult<()> {
         let b = self.body(&body)?;
-        self.with(|s| s.set_body_acceleration(b, acceleration.0))
+        self.with(|s| s.set_body_acceleration(b, acceleration_m_s2.0))
     }
 
     /// Set the external angular acceleration of a body (persists), rad/s².
-    fn set_body_angular_acceleration(&self, body: BodyArg, angular_acceleration: V3) -> PyResult<()> {
+    fn set_body_angular_acceleration(&self, body: BodyArg, angular_acceleration_rad_s2: V3) -> PyResult<()> {
         let b = self.body(&body)?;
-        self.with(|s| s.set_body_angular_acceleration(b, angular_acceleration.0))
+        self.with(|s| s.set_body_angular_acceleration(b, angular_acceleration_rad_s2.0))
     }
 
     /// Every body's pose and velocity by label: dicts with `position_m`, `orientation_wxyz`,
@@ -1402,9 +1393,9 @@ impl Simulation {
     }
 
     /// Change the mass (kg) and body-frame inertia tensor (kg·m², (3, 3)) of a body.
-    fn set_body_mass(&self, body: BodyArg, mass: f64, inertia: M3) -> PyResult<()> {
+    fn set_body_mass(&self, body: BodyArg, mass_kg: f64, inertia_kg_m2: M3) -> PyResult<()> {
         let b = self.body(&body)?;
-        self.with(|s| s.set_body_mass(b, mass, inertia.0))
+        self.with(|s| s.set_body_mass(b, mass_kg, inertia_kg_m2.0))
     }
 }
 

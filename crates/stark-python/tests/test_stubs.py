@@ -1,4 +1,5 @@
-"""The type stubs describe exactly the runtime API, and everything public has a docstring."""
+"""The type stubs describe exactly the runtime API (names and parameter names), and everything
+public has a docstring."""
 
 import ast
 import inspect
@@ -64,6 +65,39 @@ def test_module_stub_matches_the_runtime():
 def test_submodule_stubs_match_the_runtime(module, stub):
     top, _ = stub_names(PACKAGE / stub)
     assert public(module) == top - ALIASES
+
+
+def stub_functions(path):
+    """(class name or None, function node) for every function and method of a stub, but
+    properties, overloads and dunder methods."""
+    for node in ast.parse(path.read_text()).body:
+        if isinstance(node, ast.FunctionDef):
+            yield None, node
+        elif isinstance(node, ast.ClassDef):
+            for item in node.body:
+                if not isinstance(item, ast.FunctionDef):
+                    continue
+                decorators = {d.id for d in item.decorator_list if isinstance(d, ast.Name)}
+                if (not item.name.startswith("__") and not decorators & {"property", "overload"}
+                        and not any(isinstance(d, ast.Attribute) for d in item.decorator_list)):
+                    yield node.name, item
+
+
+@pytest.mark.parametrize("module, stub", [(_starkrs, "__init__.pyi"), (geometry, "geometry.pyi"),
+                                          (meshes, "meshes.pyi")])
+def test_stub_parameter_names_match_the_runtime(module, stub):
+    # Keyword arguments are part of the API: a renamed parameter (units in names) must be renamed
+    # in the stub too.
+    checked, wrong = 0, []
+    for cls, fn in stub_functions(PACKAGE / stub):
+        obj = getattr(getattr(module, cls), fn.name) if cls else getattr(module, fn.name)
+        runtime = [n for n in inspect.signature(obj).parameters if n not in ("self", "$self")]
+        a = fn.args
+        stubbed = [x.arg for x in a.posonlyargs + a.args + a.kwonlyargs if x.arg not in ("self", "cls")]
+        if runtime != stubbed:
+            wrong.append(f"{cls}.{fn.name}: runtime {runtime}, stub {stubbed}")
+        checked += 1
+    assert checked > 0 and wrong == []
 
 
 def test_everything_public_has_a_docstring():

@@ -720,19 +720,19 @@ class MassProperties:
     """Mass, centre of mass and inertia tensor of a solid with uniform density."""
     def __new__(cls, mass_kg: float, center_of_mass_m: _Vector, inertia_kg_m2: ArrayLike) -> MassProperties: ...
     @staticmethod
-    def cuboid(mass_kg: float, size: _Vector) -> MassProperties:
-        """Solid box of `mass_kg` with side lengths `size` (m), centred at the origin."""
+    def cuboid(mass_kg: float, size_m: _Vector) -> MassProperties:
+        """Solid box of `mass_kg` with side lengths `size_m`, centred at the origin."""
     @staticmethod
-    def sphere(mass_kg: float, radius: float) -> MassProperties:
-        """Solid sphere of `mass_kg` and radius `radius` (m)."""
+    def sphere(mass_kg: float, radius_m: float) -> MassProperties:
+        """Solid sphere of `mass_kg` and radius `radius_m`."""
     @staticmethod
-    def cylinder(mass_kg: float, radius: float, height: float) -> MassProperties:
-        """Solid cylinder of `mass_kg`, radius and height (m) along z, centred."""
+    def cylinder(mass_kg: float, radius_m: float, height_m: float) -> MassProperties:
+        """Solid cylinder of `mass_kg`, `radius_m` and `height_m` along z, centred."""
     @staticmethod
-    def torus(mass_kg: float, major_radius: float, minor_radius: float) -> MassProperties:
-        """Solid torus in the xy plane: major radius (centre of the tube) and tube radius (m)."""
+    def torus(mass_kg: float, major_radius_m: float, minor_radius_m: float) -> MassProperties:
+        """Solid torus in the xy plane: `major_radius_m` (to the centre of the tube) and `minor_radius_m` (of the tube)."""
     @staticmethod
-    def from_mesh(vertices: _Points, triangles: _Indices, density_kg_m3: float) -> MassProperties:
+    def from_mesh(vertices_m: _Points, triangles: _Indices, density_kg_m3: float) -> MassProperties:
         """A closed, outward-oriented triangle mesh of uniform density (kg/m³)."""
     @property
     def mass_kg(self) -> float:
@@ -971,22 +971,22 @@ class Simulation:
     def add_rigid_body(
         self,
         label: str,
-        mass: float,
-        inertia: ArrayLike,
-        position: Optional[_Vector] = None,
+        mass_kg: float,
+        inertia_kg_m2: ArrayLike,
+        position_m: Optional[_Vector] = None,
         orientation: Optional[_Rotation] = None,
     ) -> RigidBody:
-        """Add a rigid body of `mass` (kg) and body-frame inertia tensor (3, 3); it starts at rest."""
+        """Add a rigid body of `mass_kg` and body-frame inertia tensor `inertia_kg_m2` (3, 3); it starts at rest."""
     def add_rigid_body_with(
         self,
         label: str,
         mass_properties: MassProperties,
-        position: Optional[_Vector] = None,
+        position_m: Optional[_Vector] = None,
         orientation: Optional[_Rotation] = None,
     ) -> RigidBody:
-        """Add a rigid body from its mass properties; its centre of mass goes to `position`."""
+        """Add a rigid body from its mass properties; its centre of mass goes to `position_m`."""
     def add_rigid_collision_mesh(
-        self, body: _HasBody, vertices: _Points, triangles: _Indices, thickness_m: Optional[float] = None
+        self, body: _HasBody, local_vertices_m: _Points, triangles: _Indices, thickness_m: Optional[float] = None
     ) -> RigidMesh:
         """Give a body a collision mesh (vertices in the body frame, relative to its centre of mass)."""
     def rigid_body(self, label: str) -> Optional[RigidBody]:
@@ -1018,33 +1018,33 @@ class Simulation:
         """External force on a body's centre of mass, N."""
     def body_torque(self, body: _HasBody) -> NDArray[np.float64]:
         """External torque on a body, N·m."""
-    def body_point_to_world(self, body: _HasBody, points: Union[_Vector, _Points]) -> NDArray[np.float64]:
+    def body_point_to_world(self, body: _HasBody, points_m: Union[_Vector, _Points]) -> NDArray[np.float64]:
         """World positions of body-frame points: (3,) → (3,), (n, 3) → (n, 3)."""
-    def body_point_to_local(self, body: _HasBody, points: Union[_Vector, _Points]) -> NDArray[np.float64]:
+    def body_point_to_local(self, body: _HasBody, points_m: Union[_Vector, _Points]) -> NDArray[np.float64]:
         """Body-frame coordinates of world points: (3,) → (3,), (n, 3) → (n, 3)."""
     def body_direction_to_world(self, body: _HasBody, directions: Union[_Vector, _Points]) -> NDArray[np.float64]:
         """World directions of body-frame directions."""
     def body_direction_to_local(self, body: _HasBody, directions: Union[_Vector, _Points]) -> NDArray[np.float64]:
         """Body-frame directions of world directions."""
-    def body_velocity_at(self, body: _HasBody, points: Union[_Vector, _Points]) -> NDArray[np.float64]:
+    def body_velocity_at(self, body: _HasBody, points_m: Union[_Vector, _Points]) -> NDArray[np.float64]:
         """Velocities of world points moving with the body, m/s."""
-    def set_body_pose(self, body: _HasBody, position: _Vector, orientation: Optional[_Rotation] = None) -> None:
-        """Move a body: centre of mass to `position` (m), orientation to `orientation` (its mesh follows)."""
-    def set_body_velocity(self, body: _HasBody, velocity: _Vector) -> None:
+    def set_body_pose(self, body: _HasBody, position_m: _Vector, orientation: Optional[_Rotation] = None) -> None:
+        """Move a body: centre of mass to `position_m`, orientation to `orientation` (default: unchanged); its meshes follow."""
+    def set_body_velocity(self, body: _HasBody, velocity_m_s: _Vector) -> None:
         """Set the linear velocity of a body's centre of mass, m/s."""
-    def set_body_angular_velocity(self, body: _HasBody, angular_velocity: _Vector) -> None:
+    def set_body_angular_velocity(self, body: _HasBody, angular_velocity_rad_s: _Vector) -> None:
         """Set the angular velocity of a body (world frame), rad/s."""
-    def set_body_force(self, body: _HasBody, force: _Vector) -> None:
+    def set_body_force(self, body: _HasBody, force_n: _Vector) -> None:
         """Set the external force at a body's centre of mass (persists until changed), N."""
-    def set_body_torque(self, body: _HasBody, torque: _Vector) -> None:
+    def set_body_torque(self, body: _HasBody, torque_n_m: _Vector) -> None:
         """Set the external torque on a body (persists until changed), N·m."""
-    def add_body_force_at(self, body: _HasBody, force: _Vector, at: _Vector) -> None:
-        """Add a force applied at the world point `at` (a force plus the torque (at − c) × f)."""
-    def set_body_acceleration(self, body: _HasBody, acceleration: _Vector) -> None:
+    def add_body_force_at(self, body: _HasBody, force_n: _Vector, at_m: _Vector) -> None:
+        """Add a force `force_n` applied at the world point `at_m` (a force plus the torque (at − c) × f)."""
+    def set_body_acceleration(self, body: _HasBody, acceleration_m_s2: _Vector) -> None:
         """Set the external acceleration of a body (added to gravity; persists), m/s²."""
-    def set_body_angular_acceleration(self, body: _HasBody, angular_acceleration: _Vector) -> None:
+    def set_body_angular_acceleration(self, body: _HasBody, angular_acceleration_rad_s2: _Vector) -> None:
         """Set the external angular acceleration of a body (persists), rad/s²."""
-    def set_body_mass(self, body: _HasBody, mass: float, inertia: ArrayLike) -> None:
+    def set_body_mass(self, body: _HasBody, mass_kg: float, inertia_kg_m2: ArrayLike) -> None:
         """Change the mass (kg) and body-frame inertia tensor (kg·m², (3, 3)) of a body."""
 
     # ---- Joints (body a None: the world; points and axes in world coordinates, now) ----
@@ -1210,7 +1210,7 @@ class Simulation:
         thickness_m: Optional[float] = None,
     ) -> RigidObject:
         """A body from a closed triangle mesh in world coordinates of uniform density, placed where the mesh is."""
-    def add_rigid_output_mesh(self, body: _HasBody, vertices: _Points, triangles: _Indices) -> NodeSet:
+    def add_rigid_output_mesh(self, body: _HasBody, local_vertices_m: _Points, triangles: _Indices) -> NodeSet:
         """Give a body a mesh that is only drawn (body frame); returns its node set."""
     def set_bodies_collision(self, a: _HasBody, b: _HasBody, enabled: bool) -> None:
         """Switch contact between all collision meshes of bodies a and b off or on."""
