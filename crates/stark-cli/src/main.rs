@@ -87,7 +87,8 @@ struct CheckReport {
 /// The independent per-step check of `stark run --check`: an exact edge–triangle intersection
 /// test over all contact surfaces (not the solver's CCD) and the sign of every tet's volume.
 fn check_step(sim: &Simulation, report: &mut CheckReport) -> stark::Result<()> {
-    let crossings = sim.contact.find_intersections(&sim.nodes.x);
+    let check = sim.state_check();
+    let crossings = &check.intersections;
     if !crossings.is_empty() {
         return Err(stark::StarkError::InvalidInput(format!(
             "--check: {} intersection(s) at t = {:.6} s, e.g. {}",
@@ -96,7 +97,7 @@ fn check_step(sim: &Simulation, report: &mut CheckReport) -> stark::Result<()> {
             crossings[..crossings.len().min(3)].join("; ")
         )));
     }
-    let inverted = sim.deformables.tets.potential.count_inverted(&sim.nodes.x);
+    let inverted = check.inverted_tets;
     report.steps_checked += 1;
     report.most_inverted_tets = report.most_inverted_tets.max(inverted);
     report.steps_with_inverted_tets += u64::from(inverted > 0);

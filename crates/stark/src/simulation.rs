@@ -110,6 +110,15 @@ pub struct RunSummary {
     pub max_joint_violation_rad: f64,
 }
 
+/// Result of [`Simulation::state_check`].
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct StateCheck {
+    /// The intersecting edge–triangle pairs, described.
+    pub intersections: Vec<String>,
+    /// Inverted tets.
+    pub inverted_tets: usize,
+}
+
 /// A simulation: nodes, energies, settings and the time loop.
 pub struct Simulation {
     /// Settings (may be changed between steps).
@@ -187,6 +196,16 @@ impl Simulation {
     /// Current time step, s (below `settings.time_step_s` after failures).
     pub fn dt(&self) -> f64 {
         self.dt
+    }
+
+    /// An independent check of the current state: every edge–triangle intersection among the
+    /// contact surfaces (the exact test, not the solver's barrier or CCD) and the number of
+    /// inverted tets. `stark run --check` and the tests run it after every step.
+    pub fn state_check(&self) -> StateCheck {
+        StateCheck {
+            intersections: self.contact.find_intersections(&self.nodes.x),
+            inverted_tets: self.deformables.tets.potential.count_inverted(&self.nodes.x),
+        }
     }
 
     /// Totals so far.

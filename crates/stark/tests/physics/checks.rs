@@ -39,14 +39,15 @@ pub fn step_checked(sim: &mut Simulation, what: &str, totals: &mut ValidityTotal
     let report = sim
         .step()
         .unwrap_or_else(|e| panic!("{what}: step failed at t = {t}: {e}"));
-    let crossings = sim.contact.find_intersections(&sim.nodes.x);
+    let check = sim.state_check();
+    let crossings = &check.intersections;
     assert!(
         crossings.is_empty(),
         "{what}: intersection at t = {:.4} s: {:?}",
         sim.time(),
         &crossings[..crossings.len().min(5)]
     );
-    let inverted = sim.deformables.tets.potential.count_inverted(&sim.nodes.x);
+    let inverted = check.inverted_tets;
     assert_eq!(
         inverted,
         0,

@@ -33,14 +33,15 @@ fn run_checked_allowing_inversion(
         let report = sim
             .step()
             .unwrap_or_else(|e| panic!("{name}: step failed at t = {}: {e}", sim.time()));
-        let crossings = sim.contact.find_intersections(&sim.nodes.x);
+        let check = sim.state_check();
+        let crossings = &check.intersections;
         assert!(
             crossings.is_empty(),
             "{name}: intersection at t = {:.4} s: {:?}",
             sim.time(),
             &crossings[..crossings.len().min(5)]
         );
-        let inverted = sim.deformables.tets.potential.count_inverted(&sim.nodes.x);
+        let inverted = check.inverted_tets;
         most_inverted = most_inverted.max(inverted);
         assert!(
             inverted <= max_inverted,
