@@ -79,6 +79,7 @@ use crate::presets::{
     LineHandle, LineMaterial, ObstacleHandle, SurfaceHandle, SurfaceMaterial, VolumeHandle, VolumeMaterial,
 };
 use crate::rigidbodies::joints::JointHandle;
+use crate::rigidbodies::{Shape, ShapeError};
 use crate::simulation::Simulation;
 use crate::solver::Settings;
 use nalgebra::{Rotation3, Unit, Vector3};
@@ -518,6 +519,25 @@ struct SphereGenerator {
 #[serde(deny_unknown_fields)]
 struct BoxGenerator {
     size_m: [f64; 3],
+}
+
+fn default_capsule_slices() -> usize {
+    16
+}
+
+fn default_capsule_rings() -> usize {
+    4
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CapsuleGenerator {
+    radius_m: f64,
+    height_m: f64,
+    #[serde(default = "default_capsule_slices")]
+    slices: usize,
+    #[serde(default = "default_capsule_rings")]
+    cap_rings: usize,
 }
 
 #[derive(Deserialize)]
@@ -1334,11 +1354,26 @@ fn build_line(sim: &mut Simulation, ctx: &Ctx, at: &At, e: &LineEntry) -> std::r
         .map_err(|err| object_error(ctx, at, &e.material, key, err))
 }
 
-/// Most subdivisions of an obstacle `sphere` (`10·4ˢ + 2` vertices: 163842 at 7).
-const MAX_SPHERE_SUBDIVISIONS: usize = 7;
-
 /// Prescribed-position stiffness of an obstacle that gives none, N/m.
 const DEFAULT_OBSTACLE_STIFFNESS: f64 = 1e6;
+
+/// A [`ShapeError`] of the geometry given under `key` (`box`, `sphere`, ..., `mesh`,
+/// `vertices_m`) located at its field: `box.size_m`, `sphere.radius_m`, `mesh`,
+/// `triangles[i]`, ...
+fn shape_error(ctx: &Ctx, at: &At, key: &str, e: ShapeError) -> SceneError {
+    let field = e.field.split('.').next().unwrap_or(e.field);
+    let at = match field {
+        "mass_kg" | "density_kg_m3" | "scale" | "vertices_m" => at.key(field),
+        "triangles" => match e.index {
+            Some(i) => at.key("triangles").index(i),
+            None => at.key("triangles"),
+        },
+        "path" => at.key("mesh"),
+        "surface" => at.key(key),
+        _ => at.keys(&[key, field]),
+    };
+    ctx.err(&at, e.message)
+}
 
 fn check_positive(ctx: &Ctx, at: &At, key: &str, value: f64, unit: &str) -> std::result::Result<(), SceneError> {
     if value > 0.0 && value.is_finite() {
@@ -1371,81 +1406,53 @@ fn build_obstacle(
         e.vertices_m.is_some(),
         ("triangles", e.triangles.is_some()),
     )?;
-    let (mut vertices, triangles) = match key {
+    let shape = match key {
         "sphere" => {
             let g = e.sphere.as_ref().expect("checked");
-            let at = at.key("sphere");
-            check_positive(ctx, &at, "radius_m", g.radius_m, "m")?;
-            if g.subdivisions > MAX_SPHERE_SUBDIVISIONS {
-                return Err(ctx.err(
-                    &at.key("subdivisions"),
-                    format!(
-                        "subdivisions = {} is too many (at most {MAX_SPHERE_SUBDIVISIONS}; each one quadruples the triangles)",
-                        g.subdivisions
-                    ),
-                ));
-            }
-            let m = meshes::sphere_mesh(g.radius_m, g.subdivisions);
-            (m.vertices, m.elements)
+            Some(Shape::Sphere {
+                radius_m: g.radius_m,
+                subdivisions: g.subdivisions,
+            })
         }
-        "box" => {
-            let g = e.box_.as_ref().expect("checked");
-            if !g.size_m.iter().all(|s| *s > 0.0 && s.is_finite()) {
-                return Err(ctx.err(
-                    &at.keys(&["box", "size_m"]),
-                    format!("size_m = {:?} must be positive and finite", g.size_m),
-                ));
-            }
-            let m = meshes::box_mesh(Vector3::from(g.size_m));
-            (m.vertices, m.elements)
-        }
+        "box" => Some(Shape::Box {
+            size_m: Vector3::from(e.box_.as_ref().expect("checked").size_m),
+        }),
         "cylinder" => {
             let g = e.cylinder.as_ref().expect("checked");
-            let at = at.key("cylinder");
-            check_positive(ctx, &at, "radius_m", g.radius_m, "m")?;
-            check_positive(ctx, &at, "height_m", g.height_m, "m")?;
-            if g.slices < 3 {
-                return Err(ctx.err(&at.key("slices"), format!("slices = {} must be at least 3", g.slices)));
-            }
-            if g.stacks == 0 {
-                return Err(ctx.err(&at.key("stacks"), "stacks = 0 must be positive"));
-            }
-            let m = meshes::cylinder_mesh(g.radius_m, g.height_m, g.slices, g.stacks);
-            (m.vertices, m.elements)
+            Some(Shape::Cylinder {
+                radius_m: g.radius_m,
+                height_m: g.height_m,
+                slices: g.slices,
+                stacks: g.stacks,
+            })
         }
-        "grid" => {
-            let g = e.grid.as_ref().expect("checked");
-            check_grid(ctx, &at.key("grid"), &g.size_m, &g.quads, "quads")?;
-            let m = meshes::triangle_grid([0.0, 0.0], g.size_m, g.quads, 0.0);
-            (m.vertices, m.elements)
-        }
-        "mesh" => {
-            let path = mesh_path(base_dir, e.mesh.as_deref().expect("checked"));
-            let m = load_triangle_mesh(&path).map_err(|err| ctx.err(&at.key("mesh"), err.to_string()))?;
-            (m.vertices, m.elements)
-        }
-        _ => {
-            let vertices: Vec<Vector3<f64>> = e
+        "mesh" => Some(Shape::mesh_file(mesh_path(
+            base_dir,
+            e.mesh.as_deref().expect("checked"),
+        ))),
+        "vertices_m" => Some(Shape::Mesh {
+            vertices_m: e
                 .vertices_m
                 .as_ref()
                 .expect("checked")
                 .iter()
                 .map(|v| Vector3::from(*v))
-                .collect();
-            let triangles = e.triangles.clone().expect("checked");
-            if triangles.is_empty() {
-                return Err(ctx.err(&at.key("triangles"), "the triangle list is empty"));
-            }
-            let n = vertices.len();
-            for (i, t) in triangles.iter().enumerate() {
-                if let Some(v) = t.iter().find(|&&v| v >= n) {
-                    return Err(ctx.err(
-                        &at.key("triangles").index(i),
-                        format!("triangle {i} refers to vertex {v}, but there are {n} vertices"),
-                    ));
-                }
-            }
-            (vertices, triangles)
+                .collect(),
+            triangles: e.triangles.clone().expect("checked"),
+            scale: Vector3::repeat(1.0),
+        }),
+        _ => None,
+    };
+    let (mut vertices, triangles) = match shape {
+        Some(shape) => {
+            let m = shape.surface_mesh().map_err(|err| shape_error(ctx, at, key, err))?;
+            (m.vertices, m.elements)
+        }
+        None => {
+            let g = e.grid.as_ref().expect("checked");
+            check_grid(ctx, &at.key("grid"), &g.size_m, &g.quads, "quads")?;
+            let m = meshes::triangle_grid([0.0, 0.0], g.size_m, g.quads, 0.0);
+            (m.vertices, m.elements)
         }
     };
     place(ctx, at, &mut vertices, e.scale, e.rotate_deg.as_ref(), e.translate_m)?;
@@ -2467,7 +2474,7 @@ material = { preset = "elastic_rubber_band", strain = { section_radius_m = 0.003
             (
                 "bad box",
                 format!("{OBSTACLE}box = {{ size_m = [1.0, 0.0, 1.0] }}\ncontact_thickness_m = 0.002\n"),
-                vec!["test.toml:4:9: size_m = [1.0, 0.0, 1.0] must be positive and finite in obstacle 'ball' box.size_m"],
+                vec!["test.toml:4:9: size_m.y = 0 must be positive and finite (m) in obstacle 'ball' box.size_m"],
             ),
             (
                 "bad cylinder",

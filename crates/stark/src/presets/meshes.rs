@@ -480,6 +480,55 @@ pub fn torus_mesh(major_radius: f64, minor_radius: f64, major_segments: usize, m
     Mesh { vertices, elements }
 }
 
+/// Closed capsule along z, centred: a cylinder of `height` between the centres of two
+/// hemispherical caps of `radius`, `slices` vertices around each ring and `cap_rings` rings per
+/// cap from the pole to the equator (2·cap_rings rings plus two poles; outward oriented).
+///
+/// # Panics
+/// If `slices < 3` or `cap_rings == 0`.
+pub fn capsule_mesh(radius: f64, height: f64, slices: usize, cap_rings: usize) -> Mesh<3> {
+    assert!(
+        slices >= 3 && cap_rings > 0,
+        "capsule_mesh: need slices >= 3 and cap_rings >= 1, got {slices} and {cap_rings}"
+    );
+    // Rings from the bottom up: (z, ring radius), at the polar angle α from the nearer pole.
+    let mut rings = Vec::with_capacity(2 * cap_rings);
+    for k in 1..=cap_rings {
+        let (s, c) = (0.5 * PI * k as f64 / cap_rings as f64).sin_cos();
+        rings.push((-0.5 * height - radius * c, radius * s));
+    }
+    for k in (1..=cap_rings).rev() {
+        let (s, c) = (0.5 * PI * k as f64 / cap_rings as f64).sin_cos();
+        rings.push((0.5 * height + radius * c, radius * s));
+    }
+    let mut vertices = Vec::with_capacity(slices * rings.len() + 2);
+    for &(z, rho) in &rings {
+        for i in 0..slices {
+            let (s, c) = (2.0 * PI * i as f64 / slices as f64).sin_cos();
+            vertices.push(Vector3::new(rho * c, rho * s, z));
+        }
+    }
+    let bottom = vertices.len();
+    vertices.push(Vector3::new(0.0, 0.0, -0.5 * height - radius));
+    let top = vertices.len();
+    vertices.push(Vector3::new(0.0, 0.0, 0.5 * height + radius));
+    let ring = |j: usize, i: usize| slices * j + i % slices;
+    let last = rings.len() - 1;
+    let mut elements = Vec::with_capacity(2 * slices * rings.len());
+    for j in 0..last {
+        for i in 0..slices {
+            let (a, b, c, d) = (ring(j, i), ring(j, i + 1), ring(j + 1, i + 1), ring(j + 1, i));
+            elements.push([a, b, c]);
+            elements.push([a, c, d]);
+        }
+    }
+    for i in 0..slices {
+        elements.push([bottom, ring(0, i + 1), ring(0, i)]);
+        elements.push([top, ring(last, i), ring(last, i + 1)]);
+    }
+    Mesh { vertices, elements }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

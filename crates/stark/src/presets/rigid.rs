@@ -7,12 +7,10 @@
 //! outside the mesh, as in the original. [`Simulation::add_rigid_mesh`] instead integrates the
 //! mass properties of a closed triangle mesh of given density.
 
-use super::meshes;
 use crate::error::{check_param, Result, StarkError};
-use crate::rigidbodies::{MassProperties, RigidBodyHandle, RigidMeshHandle};
+use crate::rigidbodies::{Mass, MassProperties, RigidBodyHandle, RigidMeshHandle, Shape, ShapeError};
 use crate::simulation::Simulation;
 use nalgebra::{UnitQuaternion, Vector3};
-use std::collections::HashMap;
 
 /// Handles of a rigid body made by a preset.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -23,18 +21,7 @@ pub struct RigidHandle {
     pub mesh: RigidMeshHandle,
 }
 
-/// Most subdivisions of [`Simulation::add_sphere`] (7: 163 842 vertices).
-pub const MAX_SPHERE_SUBDIVISIONS: usize = 7;
-
-fn check_positive(label: &str, field: &'static str, value: f64) -> Result<()> {
-    check_param(
-        label,
-        field,
-        value,
-        value > 0.0 && value.is_finite(),
-        "must be positive and finite",
-    )
-}
+pub use crate::rigidbodies::shape::MAX_SPHERE_SUBDIVISIONS;
 
 fn check_orientation(label: &str, q: &UnitQuaternion<f64>) -> Result<()> {
     if q.coords.iter().all(|c| c.is_finite()) {
@@ -46,61 +33,9 @@ fn check_orientation(label: &str, q: &UnitQuaternion<f64>) -> Result<()> {
     }
 }
 
-fn check_segments(label: &str, what: &str, n: usize, min: usize) -> Result<()> {
-    if n >= min {
-        Ok(())
-    } else {
-        Err(StarkError::InvalidInput(format!(
-            "rigid body '{label}' needs at least {min} {what}, got {n}"
-        )))
-    }
-}
-
-/// Check that `triangles` form a closed, consistently oriented 2-manifold: every directed edge
-/// is used by exactly one triangle and its reverse by exactly one other.
-fn check_closed_surface(label: &str, n_vertices: usize, triangles: &[[usize; 3]]) -> Result<()> {
-    if triangles.is_empty() {
-        return Err(StarkError::InvalidInput(format!(
-            "mesh of rigid body '{label}' has no triangles"
-        )));
-    }
-    let mut directed: HashMap<(usize, usize), usize> = HashMap::with_capacity(3 * triangles.len());
-    for (i, t) in triangles.iter().enumerate() {
-        if let Some(&v) = t.iter().find(|&&v| v >= n_vertices) {
-            return Err(StarkError::NodeOutOfRange {
-                object: label.to_string(),
-                kind: "triangle",
-                index: i,
-                node: v,
-                n_nodes: n_vertices,
-            });
-        }
-        if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] {
-            return Err(StarkError::BadElement {
-                object: label.to_string(),
-                kind: "triangle",
-                index: i,
-                detail: format!("repeats a vertex: {t:?}"),
-            });
-        }
-        for k in 0..3 {
-            let e = (t[k], t[(k + 1) % 3]);
-            if let Some(j) = directed.insert(e, i) {
-                return Err(StarkError::InvalidInput(format!(
-                    "mesh of rigid body '{label}' is not a consistently oriented closed surface: triangles {j} \
-                     and {i} both use the edge {} → {} in the same direction",
-                    e.0, e.1
-                )));
-            }
-        }
-    }
-    if let Some((&(a, b), &i)) = directed.iter().find(|(&(a, b), _)| !directed.contains_key(&(b, a))) {
-        return Err(StarkError::InvalidInput(format!(
-            "mesh of rigid body '{label}' is not closed: the edge {a}–{b} of triangle {i} has no neighbouring \
-             triangle (a rigid body's mass properties need a closed, outward-oriented surface)"
-        )));
-    }
-    Ok(())
+/// A [`ShapeError`] as an error of rigid body `label`.
+fn shape_error(label: &str, e: ShapeError) -> StarkError {
+    StarkError::InvalidInput(format!("rigid body '{label}': {}", e.message))
 }
 
 impl Simulation {
@@ -120,7 +55,13 @@ impl Simulation {
     ) -> Result<RigidHandle> {
         check_orientation(label, &orientation)?;
         if let Some(t) = thickness_m {
-            check_positive(label, "contact thickness_m", t)?;
+            check_param(
+                label,
+                "contact thickness_m",
+                t,
+                t > 0.0 && t.is_finite(),
+                "must be positive and finite",
+            )?;
         } else if self.settings.contact.default_thickness_m.is_none() {
             return Err(StarkError::InvalidInput(format!(
                 "rigid body '{label}' needs a contact thickness (or settings.contact.default_thickness_m)"
@@ -129,6 +70,37 @@ impl Simulation {
         let body = self.add_rigid_body_with(label, props, position_m, orientation)?;
         let mesh = self.add_rigid_collision_mesh(body, local_vertices, triangles, thickness_m)?;
         Ok(RigidHandle { body, mesh })
+    }
+
+    /// A rigid body of the solid `shape` (in the body frame) with mass (or density) `mass`: its
+    /// mass properties and collision mesh come from the shape ([`Shape::solid`]). The body frame
+    /// is the shape's frame moved to its centre of mass, which goes to `position_m`; the body is
+    /// rotated by `orientation`. Contact thickness `thickness_m`, or the default.
+    pub fn add_shape_body(
+        &mut self,
+        label: &str,
+        shape: &Shape,
+        mass: Mass,
+        position_m: Vector3<f64>,
+        orientation: UnitQuaternion<f64>,
+        thickness_m: Option<f64>,
+    ) -> Result<RigidHandle> {
+        let solid = shape.solid(mass).map_err(|e| shape_error(label, e))?;
+        let com = solid.mass.center_of_mass_m;
+        let local: Vec<Vector3<f64>> = solid.mesh.vertices.iter().map(|p| p - com).collect();
+        let centred = MassProperties {
+            center_of_mass_m: Vector3::zeros(),
+            ..solid.mass
+        };
+        self.add_rigid_preset(
+            label,
+            &centred,
+            &local,
+            &solid.mesh.elements,
+            position_m,
+            orientation,
+            thickness_m,
+        )
     }
 
     /// A solid box of `mass_kg` and full side lengths `size_m` (along the body's x, y, z), centre
@@ -143,21 +115,8 @@ impl Simulation {
         orientation: UnitQuaternion<f64>,
         thickness_m: Option<f64>,
     ) -> Result<RigidHandle> {
-        check_positive(label, "mass_kg", mass_kg)?;
-        for (field, s) in [("size_m.x", size_m.x), ("size_m.y", size_m.y), ("size_m.z", size_m.z)] {
-            check_positive(label, field, s)?;
-        }
-        let m = meshes::box_mesh(size_m);
-        let props = MassProperties::cuboid(mass_kg, size_m);
-        self.add_rigid_preset(
-            label,
-            &props,
-            &m.vertices,
-            &m.elements,
-            position_m,
-            orientation,
-            thickness_m,
-        )
+        let shape = Shape::Box { size_m };
+        self.add_shape_body(label, &shape, Mass::Kg(mass_kg), position_m, orientation, thickness_m)
     }
 
     /// A solid sphere of `mass_kg` and `radius_m`; collision mesh: an icosphere with
@@ -173,26 +132,8 @@ impl Simulation {
         orientation: UnitQuaternion<f64>,
         thickness_m: Option<f64>,
     ) -> Result<RigidHandle> {
-        check_positive(label, "mass_kg", mass_kg)?;
-        check_positive(label, "radius_m", radius_m)?;
-        if subdivisions > MAX_SPHERE_SUBDIVISIONS {
-            return Err(StarkError::InvalidInput(format!(
-                "sphere '{label}': {subdivisions} subdivisions would make {} triangles; at most \
-                 {MAX_SPHERE_SUBDIVISIONS} are allowed",
-                20u64 << (2 * subdivisions.min(30))
-            )));
-        }
-        let m = meshes::sphere_mesh(radius_m, subdivisions);
-        let props = MassProperties::sphere(mass_kg, radius_m);
-        self.add_rigid_preset(
-            label,
-            &props,
-            &m.vertices,
-            &m.elements,
-            position_m,
-            orientation,
-            thickness_m,
-        )
+        let shape = Shape::Sphere { radius_m, subdivisions };
+        self.add_shape_body(label, &shape, Mass::Kg(mass_kg), position_m, orientation, thickness_m)
     }
 
     /// A solid cylinder of `mass_kg`, `radius_m` and `height_m` along the body's z axis, centred;
@@ -210,22 +151,13 @@ impl Simulation {
         orientation: UnitQuaternion<f64>,
         thickness_m: Option<f64>,
     ) -> Result<RigidHandle> {
-        check_positive(label, "mass_kg", mass_kg)?;
-        check_positive(label, "radius_m", radius_m)?;
-        check_positive(label, "height_m", height_m)?;
-        check_segments(label, "slices", slices, 3)?;
-        check_segments(label, "stacks", stacks, 1)?;
-        let m = meshes::cylinder_mesh(radius_m, height_m, slices, stacks);
-        let props = MassProperties::cylinder(mass_kg, radius_m, height_m);
-        self.add_rigid_preset(
-            label,
-            &props,
-            &m.vertices,
-            &m.elements,
-            position_m,
-            orientation,
-            thickness_m,
-        )
+        let shape = Shape::Cylinder {
+            radius_m,
+            height_m,
+            slices,
+            stacks,
+        };
+        self.add_shape_body(label, &shape, Mass::Kg(mass_kg), position_m, orientation, thickness_m)
     }
 
     /// A solid torus of `mass_kg` in the body's xy plane: `major_radius_m` from the axis to the
@@ -244,29 +176,13 @@ impl Simulation {
         orientation: UnitQuaternion<f64>,
         thickness_m: Option<f64>,
     ) -> Result<RigidHandle> {
-        check_positive(label, "mass_kg", mass_kg)?;
-        check_positive(label, "major_radius_m", major_radius_m)?;
-        check_positive(label, "minor_radius_m", minor_radius_m)?;
-        check_param(
-            label,
-            "minor_radius_m",
+        let shape = Shape::Torus {
+            major_radius_m,
             minor_radius_m,
-            minor_radius_m < major_radius_m,
-            "must be smaller than major_radius_m (the tube would cross the axis)",
-        )?;
-        check_segments(label, "major segments", major_segments, 3)?;
-        check_segments(label, "minor segments", minor_segments, 3)?;
-        let m = meshes::torus_mesh(major_radius_m, minor_radius_m, major_segments, minor_segments);
-        let props = MassProperties::torus(mass_kg, major_radius_m, minor_radius_m);
-        self.add_rigid_preset(
-            label,
-            &props,
-            &m.vertices,
-            &m.elements,
-            position_m,
-            orientation,
-            thickness_m,
-        )
+            major_segments,
+            minor_segments,
+        };
+        self.add_shape_body(label, &shape, Mass::Kg(mass_kg), position_m, orientation, thickness_m)
     }
 
     /// A rigid body from a closed, outward-oriented triangle mesh given in world coordinates, of
@@ -284,27 +200,22 @@ impl Simulation {
         density_kg_m3: f64,
         thickness_m: Option<f64>,
     ) -> Result<RigidHandle> {
-        check_positive(label, "density_kg_m3", density_kg_m3)?;
-        if let Some(i) = vertices_m.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
-            return Err(StarkError::InvalidInput(format!(
-                "vertex {i} of rigid body '{label}' is not finite: {:?}",
-                vertices_m[i]
-            )));
-        }
-        check_closed_surface(label, vertices_m.len(), triangles)?;
-        let props = MassProperties::from_mesh(vertices_m, triangles, density_kg_m3)
-            .map_err(|e| StarkError::InvalidInput(format!("rigid body '{label}': {e}")))?;
-        let com = props.center_of_mass_m;
-        let local: Vec<Vector3<f64>> = vertices_m.iter().map(|p| p - com).collect();
-        let centred = MassProperties {
-            center_of_mass_m: Vector3::zeros(),
-            ..props
+        let shape = Shape::Mesh {
+            vertices_m: vertices_m.to_vec(),
+            triangles: triangles.to_vec(),
+            scale: Vector3::repeat(1.0),
         };
-        self.add_rigid_preset(
+        let com = shape
+            .solid(Mass::DensityKgM3(density_kg_m3))
+            .map_err(|e| shape_error(label, e))?
+            .mass
+            .center_of_mass_m;
+        // Body axes along the world axes: the mesh keeps its place, the centre of mass is the
+        // body's position.
+        self.add_shape_body(
             label,
-            &centred,
-            &local,
-            triangles,
+            &shape,
+            Mass::DensityKgM3(density_kg_m3),
             com,
             UnitQuaternion::identity(),
             thickness_m,
@@ -315,6 +226,7 @@ impl Simulation {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::presets::meshes;
     use crate::Settings;
 
     fn sim() -> Simulation {
@@ -447,7 +359,7 @@ mod tests {
         let mut bad = m.elements.clone();
         bad[0][0] = 8;
         let e = err(sim.add_rigid_mesh("a", &m.vertices, &bad, 1.0, None));
-        assert!(e.contains("refers to node 8"), "{e}");
+        assert!(e.contains("refers to vertex 8"), "{e}");
         let e = err(sim.add_rigid_mesh("a", &m.vertices, &m.elements, 0.0, None));
         assert!(e.contains("density"), "{e}");
         // Nothing was added by the failed calls, and the label is still free.

@@ -10,6 +10,7 @@ pub mod attachments;
 pub mod inertia;
 pub mod joints;
 pub mod mass_properties;
+pub mod shape;
 
 use crate::contact::ContactHandle;
 use crate::deformables::NodeSetHandle;
@@ -24,6 +25,7 @@ use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
 pub use inertia::{RigidBodyParams, RigidInertia};
 pub use mass_properties::MassProperties;
+pub use shape::{Mass, Shape, ShapeError, Solid};
 
 /// A rigid body of a simulation.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]

@@ -8,20 +8,17 @@
 //! constructor of its `type` (`add_hinge_joint`, `add_motor`, ...).
 
 use super::{
-    check_positive, geometry_key, mesh_path, At, BoxGenerator, Ctx, CylinderGenerator, Motion, Rotate, SceneError,
-    SceneObject, SphereGenerator, MAX_SPHERE_SUBDIVISIONS,
+    check_positive, geometry_key, mesh_path, shape_error, At, BoxGenerator, CapsuleGenerator, Ctx, CylinderGenerator,
+    Motion, Rotate, SceneError, SceneObject, SphereGenerator,
 };
 use crate::contact::ContactHandle;
 use crate::deformables::NodeSetHandle;
 use crate::error::StarkError;
-use crate::io::mesh_files::load_triangle_mesh;
-use crate::presets::meshes;
 use crate::rigidbodies::joints::{JointHandle, JointParams, DEFAULT_CONTROLLER_DELAY};
-use crate::rigidbodies::{MassProperties, RigidBodyHandle, RigidBodyParams};
+use crate::rigidbodies::{Mass, MassProperties, RigidBodyHandle, RigidBodyParams, Shape, ShapeError};
 use crate::simulation::Simulation;
 use nalgebra::{Matrix3, Quaternion, Unit, UnitQuaternion, Vector3};
 use serde::Deserialize;
-use std::f64::consts::PI;
 use std::path::Path;
 
 type Res<T> = std::result::Result<T, SceneError>;
@@ -75,6 +72,7 @@ pub(super) struct RigidBodyEntry {
     box_: Option<BoxGenerator>,
     sphere: Option<SphereGenerator>,
     cylinder: Option<CylinderGenerator>,
+    capsule: Option<CapsuleGenerator>,
     torus: Option<TorusGenerator>,
     mesh: Option<String>,
     vertices_m: Option<Vec<[f64; 3]>>,
@@ -168,20 +166,15 @@ fn orientation(
 // ------------------------------------------------------------------------------------------
 
 /// A body's shape in its body frame (centre of mass at the origin) and its mass properties.
-struct Shape {
+struct BodyShape {
     vertices: Vec<Vector3<f64>>,
     triangles: Vec<[usize; 3]>,
     mass: MassProperties,
 }
 
-/// The mass of a primitive of `volume` m³: `mass_kg`, or `density_kg_m3` times the volume.
-fn primitive_mass(e: &RigidBodyEntry, volume: f64) -> f64 {
-    e.mass_kg.unwrap_or_else(|| e.density_kg_m3.unwrap_or(0.0) * volume)
-}
-
-/// The shape and mass properties of an entry. (When the rigid-body presets `add_box`,
-/// `add_sphere`, ... exist, the primitives can go through them.)
-fn shape(ctx: &Ctx, base_dir: &Path, at: &At, e: &RigidBodyEntry) -> Res<Shape> {
+/// The [`Shape`] of an entry (its generator table, `mesh` file or inline mesh) and its mass
+/// properties, all checks done by [`Shape`].
+fn shape(ctx: &Ctx, base_dir: &Path, at: &At, e: &RigidBodyEntry) -> Res<BodyShape> {
     let key = geometry_key(
         ctx,
         at,
@@ -189,13 +182,14 @@ fn shape(ctx: &Ctx, base_dir: &Path, at: &At, e: &RigidBodyEntry) -> Res<Shape> 
             ("box", e.box_.is_some()),
             ("sphere", e.sphere.is_some()),
             ("cylinder", e.cylinder.is_some()),
+            ("capsule", e.capsule.is_some()),
             ("torus", e.torus.is_some()),
         ],
         Some(e.mesh.is_some()),
         e.vertices_m.is_some(),
         ("triangles", e.triangles.is_some()),
     )?;
-    match (e.mass_kg, e.density_kg_m3) {
+    let mass = match (e.mass_kg, e.density_kg_m3) {
         (None, None) => {
             return Err(ctx.err(
                 at,
@@ -211,169 +205,102 @@ fn shape(ctx: &Ctx, base_dir: &Path, at: &At, e: &RigidBodyEntry) -> Res<Shape> 
                 "give the mass once: `mass_kg` or `density_kg_m3`",
             ))
         }
-        (Some(m), None) => check_positive(ctx, at, "mass_kg", m, "kg")?,
-        (None, Some(rho)) => check_positive(ctx, at, "density_kg_m3", rho, "kg/m³")?,
-    }
+        (Some(m), None) => Mass::Kg(m),
+        (None, Some(rho)) => Mass::DensityKgM3(rho),
+    };
     if e.scale.is_some() && !matches!(key, "mesh" | "vertices_m") {
         return Err(ctx.err(
             &at.key("scale"),
             format!("`scale` applies to `mesh` and inline geometry; give the {key}'s size instead"),
         ));
     }
-    let primitive = |m: meshes::Mesh<3>, mass: MassProperties| Shape {
-        vertices: m.vertices,
-        triangles: m.elements,
-        mass,
-    };
-    let mut shape = match key {
-        "box" => {
-            let g = e.box_.as_ref().expect("checked");
-            if !g.size_m.iter().all(|s| *s > 0.0 && s.is_finite()) {
-                return Err(ctx.err(
-                    &at.keys(&["box", "size_m"]),
-                    format!("size_m = {:?} must be positive and finite", g.size_m),
-                ));
-            }
-            let size = Vector3::from(g.size_m);
-            let m = primitive_mass(e, size.x * size.y * size.z);
-            primitive(meshes::box_mesh(size), MassProperties::cuboid(m, size))
-        }
+    if let Some(s) = e.scale {
+        check_positive(ctx, at, "scale", s, "a factor")?;
+    }
+    let scale = Vector3::repeat(e.scale.unwrap_or(1.0));
+    let shape = match key {
+        "box" => Shape::Box {
+            size_m: Vector3::from(e.box_.as_ref().expect("checked").size_m),
+        },
         "sphere" => {
             let g = e.sphere.as_ref().expect("checked");
-            let at = at.key("sphere");
-            check_positive(ctx, &at, "radius_m", g.radius_m, "m")?;
-            if g.subdivisions > MAX_SPHERE_SUBDIVISIONS {
-                return Err(ctx.err(
-                    &at.key("subdivisions"),
-                    format!(
-                        "subdivisions = {} is too many (at most {MAX_SPHERE_SUBDIVISIONS})",
-                        g.subdivisions
-                    ),
-                ));
+            Shape::Sphere {
+                radius_m: g.radius_m,
+                subdivisions: g.subdivisions,
             }
-            let r = g.radius_m;
-            let m = primitive_mass(e, 4.0 / 3.0 * PI * r * r * r);
-            primitive(meshes::sphere_mesh(r, g.subdivisions), MassProperties::sphere(m, r))
         }
         "cylinder" => {
             let g = e.cylinder.as_ref().expect("checked");
-            let at = at.key("cylinder");
-            check_positive(ctx, &at, "radius_m", g.radius_m, "m")?;
-            check_positive(ctx, &at, "height_m", g.height_m, "m")?;
-            if g.slices < 3 {
-                return Err(ctx.err(&at.key("slices"), format!("slices = {} must be at least 3", g.slices)));
+            Shape::Cylinder {
+                radius_m: g.radius_m,
+                height_m: g.height_m,
+                slices: g.slices,
+                stacks: g.stacks,
             }
-            if g.stacks == 0 {
-                return Err(ctx.err(&at.key("stacks"), "stacks = 0 must be positive"));
+        }
+        "capsule" => {
+            let g = e.capsule.as_ref().expect("checked");
+            Shape::Capsule {
+                radius_m: g.radius_m,
+                height_m: g.height_m,
+                slices: g.slices,
+                cap_rings: g.cap_rings,
             }
-            let (r, h) = (g.radius_m, g.height_m);
-            let m = primitive_mass(e, PI * r * r * h);
-            primitive(
-                meshes::cylinder_mesh(r, h, g.slices, g.stacks),
-                MassProperties::cylinder(m, r, h),
-            )
         }
         "torus" => {
             let g = e.torus.as_ref().expect("checked");
-            let at = at.key("torus");
-            check_positive(ctx, &at, "major_radius_m", g.major_radius_m, "m")?;
-            check_positive(ctx, &at, "minor_radius_m", g.minor_radius_m, "m")?;
-            if g.minor_radius_m >= g.major_radius_m {
-                return Err(ctx.err(
-                    &at.key("minor_radius_m"),
-                    format!(
-                        "minor_radius_m = {} must be smaller than major_radius_m = {} (the tube would cross itself)",
-                        g.minor_radius_m, g.major_radius_m
-                    ),
-                ));
+            Shape::Torus {
+                major_radius_m: g.major_radius_m,
+                minor_radius_m: g.minor_radius_m,
+                major_segments: g.major_segments,
+                minor_segments: g.minor_segments,
             }
-            for (k, n) in [
-                ("major_segments", g.major_segments),
-                ("minor_segments", g.minor_segments),
-            ] {
-                if n < 3 {
-                    return Err(ctx.err(&at.key(k), format!("{k} = {n} must be at least 3")));
-                }
-            }
-            let (big, small) = (g.major_radius_m, g.minor_radius_m);
-            let m = primitive_mass(e, 2.0 * PI * PI * big * small * small);
-            primitive(
-                meshes::torus_mesh(big, small, g.major_segments, g.minor_segments),
-                MassProperties::torus(m, big, small),
-            )
+        }
+        "mesh" => Shape::MeshFile {
+            path: mesh_path(base_dir, e.mesh.as_deref().expect("checked")),
+            scale,
+        },
+        _ => Shape::Mesh {
+            vertices_m: e
+                .vertices_m
+                .as_ref()
+                .expect("checked")
+                .iter()
+                .map(|v| Vector3::from(*v))
+                .collect(),
+            triangles: e.triangles.clone().expect("checked"),
+            scale,
+        },
+    };
+    let located = |err: ShapeError| {
+        let hint = if err.field == "surface" {
+            " (give `mass_kg` and `inertia_kg_m2` for an open mesh)"
+        } else {
+            ""
+        };
+        let message = format!("{}{hint}", err.message);
+        shape_error(ctx, at, key, ShapeError { message, ..err })
+    };
+    let (mesh, mut mass) = match (e.mass_kg, e.inertia_kg_m2) {
+        // Mass and inertia given: a mesh need not be closed; its frame is the body's.
+        (Some(m), Some(_)) if shape.primitive_volume_m3().is_none() => {
+            check_positive(ctx, at, "mass_kg", m, "kg")?;
+            let mesh = shape.surface_mesh().map_err(located)?;
+            let props = MassProperties {
+                mass_kg: m,
+                center_of_mass_m: Vector3::zeros(),
+                inertia_kg_m2: Matrix3::identity(),
+            };
+            (mesh, props)
         }
         _ => {
-            let (mut vertices, triangles) = if key == "mesh" {
-                let path = mesh_path(base_dir, e.mesh.as_deref().expect("checked"));
-                let m = load_triangle_mesh(&path).map_err(|err| ctx.err(&at.key("mesh"), err.to_string()))?;
-                (m.vertices, m.elements)
-            } else {
-                let vertices: Vec<Vector3<f64>> = e
-                    .vertices_m
-                    .as_ref()
-                    .expect("checked")
-                    .iter()
-                    .map(|v| Vector3::from(*v))
-                    .collect();
-                let triangles = e.triangles.clone().expect("checked");
-                if triangles.is_empty() {
-                    return Err(ctx.err(&at.key("triangles"), "the triangle list is empty"));
-                }
-                let n = vertices.len();
-                for (i, t) in triangles.iter().enumerate() {
-                    if let Some(v) = t.iter().find(|&&v| v >= n) {
-                        return Err(ctx.err(
-                            &at.key("triangles").index(i),
-                            format!("triangle {i} refers to vertex {v}, but there are {n} vertices"),
-                        ));
-                    }
-                }
-                if !vertices.iter().all(|v| v.iter().all(|c| c.is_finite())) {
-                    return Err(ctx.err(&at.key("vertices_m"), "vertices_m must be finite"));
-                }
-                (vertices, triangles)
-            };
-            if let Some(s) = e.scale {
-                check_positive(ctx, at, "scale", s, "a factor")?;
-                crate::geometry::mesh::scale(&mut vertices, s);
-            }
-            let mass = match (e.mass_kg, e.inertia_kg_m2) {
-                // Mass and inertia given: the mesh need not be closed; its frame is the body's.
-                (Some(m), Some(_)) => MassProperties {
-                    mass_kg: m,
-                    center_of_mass_m: Vector3::zeros(),
-                    inertia_kg_m2: Matrix3::identity(),
-                },
-                _ => {
-                    let density = e.density_kg_m3.unwrap_or(1.0);
-                    let mut props = MassProperties::from_mesh(&vertices, &triangles, density).map_err(|err| {
-                        ctx.err(
-                            &at.key(key),
-                            format!(
-                                "{} (give `mass_kg` and `inertia_kg_m2` for an open mesh)",
-                                err.to_string().trim_start_matches("invalid input: ")
-                            ),
-                        )
-                    })?;
-                    if let Some(m) = e.mass_kg {
-                        props.inertia_kg_m2 *= m / props.mass_kg;
-                        props.mass_kg = m;
-                    }
-                    props
-                }
-            };
-            let com = mass.center_of_mass_m;
-            vertices.iter_mut().for_each(|v| *v -= com);
-            Shape {
-                vertices,
-                triangles,
-                mass: MassProperties {
-                    center_of_mass_m: Vector3::zeros(),
-                    ..mass
-                },
-            }
+            let solid = shape.solid(mass).map_err(located)?;
+            (solid.mesh, solid.mass)
         }
     };
+    let com = mass.center_of_mass_m;
+    let vertices = mesh.vertices.iter().map(|v| v - com).collect();
+    mass.center_of_mass_m = Vector3::zeros();
     if let Some(j) = e.inertia_kg_m2 {
         let inertia = Matrix3::from_row_slice(&j.concat());
         let symmetric = (inertia - inertia.transpose()).norm() <= 1e-9 * inertia.norm();
@@ -383,9 +310,13 @@ fn shape(ctx: &Ctx, base_dir: &Path, at: &At, e: &RigidBodyEntry) -> Res<Shape> 
                 format!("inertia_kg_m2 = {j:?} must be symmetric positive definite (kg·m²)"),
             ));
         }
-        shape.mass.inertia_kg_m2 = inertia;
+        mass.inertia_kg_m2 = inertia;
     }
-    Ok(shape)
+    Ok(BodyShape {
+        vertices,
+        triangles: mesh.elements,
+        mass,
+    })
 }
 
 /// The poses of a keyframed body: its initial pose at t = 0, then each keyframe.
@@ -1183,8 +1114,10 @@ mod tests {
     use super::super::{load_scene_with, parse_scene, parse_scene_with, LoadedScene};
     use super::*;
     use crate::energy::Node;
+    use crate::presets::meshes;
     use crate::rigidbodies::joints::Primitive;
     use crate::solver::Settings;
+    use std::f64::consts::PI;
     use std::path::PathBuf;
 
     fn repo_scene(name: &str) -> PathBuf {
@@ -1669,7 +1602,7 @@ stiffness = 1e5
             (
                 "no shape",
                 "duration_s = 1.0\n[[rigid_body]]\nname = \"link\"\nmass_kg = 1.0\n".into(),
-                vec!["test.toml:2:", "no geometry: give one of `box`, `sphere`, `cylinder`, `torus`, `mesh` or `vertices_m` + `triangles`"],
+                vec!["test.toml:2:", "no geometry: give one of `box`, `sphere`, `cylinder`, `capsule`, `torus`, `mesh` or `vertices_m` + `triangles`"],
             ),
             (
                 "scale of a primitive",
@@ -1694,7 +1627,7 @@ stiffness = 1e5
             (
                 "open mesh without inertia",
                 "duration_s = 1.0\n[[rigid_body]]\nname = \"plate\"\nvertices_m = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]\ntriangles = [[0, 1, 2]]\nmass_kg = 1.0\n".into(),
-                vec!["test.toml:4:1:", "it must be closed and oriented outward (give `mass_kg` and `inertia_kg_m2` for an open mesh) in rigid_body 'plate' vertices_m"],
+                vec!["test.toml:4:1:", "the mesh is not closed", "(give `mass_kg` and `inertia_kg_m2` for an open mesh) in rigid_body 'plate' vertices_m"],
             ),
             (
                 "bad torus",
