@@ -9,6 +9,7 @@
 //! step records each primitive's violation and the force and torque it applies to each body
 //! (the generalised forces on the body's velocity DOFs, see [`JointReadout`]).
 
+pub mod coupling;
 pub mod primitives;
 
 use crate::energy::potential::{dual_derivatives, Potential, Stencil};
@@ -71,7 +72,7 @@ pub struct Servo {
 }
 
 /// A joint coordinate, measured from body-fixed directions and points.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Measure {
     /// Angle of b relative to a about a's axis: `atan2((u_a × u_b)·axis, u_a·u_b)` with the
     /// reference directions `u_a`, `u_b` (perpendicular to the axis, equal at creation).
@@ -182,8 +183,16 @@ impl JointSet {
         let el = &self.elements[e];
         let stencil = Stencil::new(el.nodes, state);
         let x = stencil.x;
+        let violation = match &el.primitive {
+            Primitive::Coupling(c) => {
+                let q: Vec<UnitQuaternion<f64>> =
+                    state.poses.iter().map(|p| UnitQuaternion::from_matrix(&p.r)).collect();
+                c.residual(&|b| state.poses[b].t, &|b| q[b]).abs()
+            }
+            _ => el.primitive.violation(&x),
+        };
         let mut r = JointReadout {
-            violation: el.primitive.violation(&x),
+            violation,
             ..Default::default()
         };
         if !el.enabled {
@@ -249,6 +258,9 @@ impl Potential<4> for JointSet {
             q: &|b| state.bodies.orientation[b],
         };
         for el in &mut self.elements {
+            if let Primitive::Coupling(c) = &mut el.primitive {
+                c.begin_step(&|b| state.bodies.position[b], &|b| state.bodies.orientation[b]);
+            }
             if let Some(servo) = el.servo {
                 let mut error = servo.target - servo.measure.value(&poses);
                 if let Measure::Angle { .. } = servo.measure {
@@ -1159,6 +1171,210 @@ impl Simulation {
             measure: h.measure.expect("slider position"),
         });
         Ok(h)
+    }
+
+    /// Angle limits of a hinge about `axis` through `point_m`: b's rotation relative to a (zero
+    /// now) stays in `[lower_rad, upper_rad]` (which must contain 0, at most one turn wide). An
+    /// angle-limit primitive between a's copy of a direction perpendicular to the axis, turned
+    /// to the middle of the range, and b's copy of it, with half the range as its limit.
+    #[allow(clippy::too_many_arguments)]
+    pub fn add_hinge_range(
+        &mut self,
+        label: &str,
+        a: Option<RigidBodyHandle>,
+        b: RigidBodyHandle,
+        point_m: Vector3<f64>,
+        axis: Vector3<f64>,
+        lower_rad: f64,
+        upper_rad: f64,
+        params: JointParams,
+    ) -> Result<JointHandle> {
+        check_vec(label, "point", &point_m)?;
+        check_axis(label, &axis)?;
+        let tau = std::f64::consts::TAU;
+        if !(lower_rad.is_finite() && upper_rad.is_finite() && lower_rad <= 1e-12 && upper_rad >= -1e-12) {
+            return Err(StarkError::InvalidInput(format!(
+                "joint '{label}': the angle range [{lower_rad}, {upper_rad}] rad must be finite and contain the current angle 0"
+            )));
+        }
+        if upper_rad - lower_rad > tau {
+            return Err(StarkError::InvalidInput(format!(
+                "joint '{label}': the angle range [{lower_rad}, {upper_rad}] rad is wider than a turn"
+            )));
+        }
+        let u = perpendicular(&axis);
+        let middle = UnitQuaternion::from_axis_angle(&Unit::new_normalize(axis), 0.5 * (lower_rad + upper_rad));
+        let mut j = Builder::new(self, label, a, Some(b), params)?;
+        let [a0, a1] = j.a.direction(&(middle * u));
+        let [b0, b1] = j.b.direction(&u);
+        j.push(
+            Primitive::AngleLimit {
+                limit_rad: 0.5 * (upper_rad - lower_rad),
+            },
+            &[a0, a1, b0, b1],
+        );
+        Ok(j.finish())
+    }
+
+    /// Position limits of a slider along `axis` through `point_m`: b's displacement relative to
+    /// a (zero now) stays in `[lower_m, upper_m]` (which must contain 0). A distance-limits
+    /// primitive from a point of a at `lower_m − L` on the axis (`L` = 1 m plus the range, so the
+    /// distance stays far from zero and nearly linear in the displacement) to b's point.
+    #[allow(clippy::too_many_arguments)]
+    pub fn add_slider_range(
+        &mut self,
+        label: &str,
+        a: Option<RigidBodyHandle>,
+        b: RigidBodyHandle,
+        point_m: Vector3<f64>,
+        axis: Vector3<f64>,
+        lower_m: f64,
+        upper_m: f64,
+        params: JointParams,
+    ) -> Result<JointHandle> {
+        check_vec(label, "point", &point_m)?;
+        check_axis(label, &axis)?;
+        if !(lower_m.is_finite() && upper_m.is_finite() && lower_m <= 1e-12 && upper_m >= -1e-12) {
+            return Err(StarkError::InvalidInput(format!(
+                "joint '{label}': the position range [{lower_m}, {upper_m}] m must be finite and contain the current position 0"
+            )));
+        }
+        let n = axis.normalize();
+        let reach = 1.0 + (upper_m - lower_m);
+        let mut j = Builder::new(self, label, a, Some(b), params)?;
+        let nodes = [j.a.point(&(point_m + n * (lower_m - reach))), j.b.point(&point_m)];
+        j.push(
+            Primitive::DistanceLimits {
+                min_m: reach,
+                max_m: reach + (upper_m - lower_m),
+            },
+            &nodes,
+        );
+        Ok(j.finish())
+    }
+
+    /// Planar joint: b's point at `point_m` stays on a's plane through it with `normal`, and b
+    /// keeps the normal's direction (3 DOFs: two translations in the plane, the rotation about
+    /// the normal).
+    pub fn add_planar_joint(
+        &mut self,
+        label: &str,
+        a: Option<RigidBodyHandle>,
+        b: RigidBodyHandle,
+        point_m: Vector3<f64>,
+        normal: Vector3<f64>,
+        params: JointParams,
+    ) -> Result<JointHandle> {
+        check_vec(label, "point", &point_m)?;
+        check_axis(label, &normal)?;
+        let mut j = Builder::new(self, label, a, Some(b), params)?;
+        let nodes = [
+            j.a.point(&point_m),
+            j.a.point(&(point_m + normal.normalize())),
+            j.b.point(&point_m),
+        ];
+        j.push(Primitive::PointOnPlane, &nodes);
+        j.direction(&normal);
+        Ok(j.finish())
+    }
+
+    /// Coupling of two joint coordinates (URDF `<mimic>`): `q_b = multiplier·q_a + offset`,
+    /// both measured from the joints' creation (hinge angles in rad, slider positions in m), as a
+    /// hard penalty of stiffness `params.stiffness` hardened to the tolerance of `b`'s kind (see
+    /// [`coupling`]). The joints must have coordinates.
+    pub fn add_joint_coupling(
+        &mut self,
+        label: &str,
+        a: &JointHandle,
+        b: &JointHandle,
+        multiplier: f64,
+        offset: f64,
+        params: JointParams,
+    ) -> Result<JointHandle> {
+        check_param(
+            label,
+            "multiplier",
+            multiplier,
+            multiplier.is_finite(),
+            "must be finite",
+        )?;
+        check_param(label, "offset", offset, offset.is_finite(), "must be finite")?;
+        let coordinate = |h: &JointHandle| {
+            h.measure.ok_or_else(|| {
+                StarkError::InvalidInput(format!(
+                    "joint '{label}' couples joint '{}', which has no coordinate (hinges and sliders have)",
+                    h.label
+                ))
+            })
+        };
+        let (ma, mb) = (coordinate(a)?, coordinate(b)?);
+        let c = coupling::Coupling {
+            a: Some(coupling::CoupledCoordinate::new(ma)),
+            b: coupling::CoupledCoordinate::new(mb),
+            multiplier,
+            offset,
+            damping: 0.0,
+            hard: true,
+        };
+        self.add_coupling_element(label, c, params)
+    }
+
+    /// A spring–damper on a joint's coordinate: torque or force `−k·(q − rest) − d·q̇`, with `q`
+    /// measured from the joint's creation (rad or m). `stiffness` in N·m/rad or N/m, `damping`
+    /// in N·m·s/rad or N·s/m; with zero stiffness it is pure joint damping.
+    pub fn add_joint_spring(
+        &mut self,
+        label: &str,
+        joint: &JointHandle,
+        stiffness: f64,
+        rest: f64,
+        damping: f64,
+    ) -> Result<JointHandle> {
+        check_param(
+            label,
+            "stiffness",
+            stiffness,
+            stiffness >= 0.0 && stiffness.is_finite(),
+            "must be non-negative",
+        )?;
+        check_param(label, "rest", rest, rest.is_finite(), "must be finite")?;
+        check_param(
+            label,
+            "damping",
+            damping,
+            damping >= 0.0 && damping.is_finite(),
+            "must be non-negative",
+        )?;
+        let m = joint.measure.ok_or_else(|| {
+            StarkError::InvalidInput(format!(
+                "joint '{label}': joint '{}' has no coordinate for a spring (hinges and sliders have)",
+                joint.label
+            ))
+        })?;
+        let c = coupling::Coupling {
+            a: None,
+            b: coupling::CoupledCoordinate::new(m),
+            multiplier: 0.0,
+            offset: rest,
+            damping,
+            hard: false,
+        };
+        let h = self.add_coupling_element(label, c, JointParams::default())?;
+        let e = h.elements[0] as usize;
+        self.rigid_bodies.joints.potential.elements[e].stiffness = stiffness;
+        Ok(h)
+    }
+
+    fn add_coupling_element(&mut self, label: &str, c: coupling::Coupling, params: JointParams) -> Result<JointHandle> {
+        let (parent, child) = match c.b.measure {
+            Measure::Angle { a, b, .. } | Measure::Position { a, b, .. } => (a, b),
+        };
+        let handle = |i: Option<u32>| i.map(|index| RigidBodyHandle { index });
+        let child = handle(child).ok_or_else(|| StarkError::InvalidInput(format!("joint '{label}': no body")))?;
+        let mut j = Builder::new(self, label, handle(parent), Some(child), params)?;
+        let nodes = c.nodes();
+        j.push(Primitive::Coupling(c), &nodes);
+        Ok(j.finish())
     }
 
     // ---- Run-time control and readouts ----

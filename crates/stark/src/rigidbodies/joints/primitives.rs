@@ -9,6 +9,7 @@
 //! and `−F·sign(u)` beyond, the derivative of `Φ(u)`; the step energy is `dt·Φ(u)`, so its
 //! gradient with respect to the velocity DOFs is the impulse `dt·F`.
 
+use super::coupling::Coupling;
 use crate::energy::{Scalar, Stencil, Vec3};
 use nalgebra::Vector3;
 
@@ -55,6 +56,13 @@ pub enum Primitive {
         /// Damping c, N·s/m.
         damping_n_s_m: f64,
     },
+    /// Point b stays on the plane through a0 with the unit normal a1 − a0: `½k((b − a0)·n)²`
+    /// (nodes: a0, a1, b). Violation: distance, m.
+    PointOnPlane,
+    /// A linear relation between two joint coordinates (mimic), or a spring–damper on one
+    /// (nodes: parent and child of each coordinate; see [`Coupling`]). Hard if `hard`. Violation:
+    /// rad or m, of the following coordinate.
+    Coupling(Coupling),
     /// Relative velocity of b's point with respect to a's along the unit direction a1 − a0 driven
     /// to a target with a capped force (nodes: a0, a1, b at a0). Soft.
     LinearVelocity {
@@ -106,13 +114,16 @@ impl Primitive {
             | Primitive::Distance { .. }
             | Primitive::DistanceLimits { .. }
             | Primitive::Spring { .. } => 2,
-            Primitive::PointOnAxis | Primitive::LinearVelocity { .. } => 3,
+            Primitive::PointOnAxis | Primitive::PointOnPlane | Primitive::LinearVelocity { .. } => 3,
             _ => 4,
         }
     }
 
     /// Whether the primitive is a hard constraint (hardened to a tolerance).
     pub fn is_hard(&self) -> bool {
+        if let Primitive::Coupling(c) = self {
+            return c.hard;
+        }
         !matches!(
             self,
             Primitive::Spring { .. } | Primitive::LinearVelocity { .. } | Primitive::AngularVelocity { .. }
@@ -121,6 +132,9 @@ impl Primitive {
 
     /// Whether the violation is an angle (rad) rather than a length (m).
     pub fn is_angular(&self) -> bool {
+        if let Primitive::Coupling(c) = self {
+            return c.b.is_angle();
+        }
         matches!(
             self,
             Primitive::Direction | Primitive::AngleLimit { .. } | Primitive::Perpendicular
@@ -150,6 +164,11 @@ impl Primitive {
                 excess * excess * excess * (k / 3.0)
             }
             Primitive::Perpendicular => (x[1] - x[0]).dot(&(x[3] - x[2])).sq() * (0.5 * k),
+            Primitive::PointOnPlane => {
+                let n = x[1] - x[0];
+                ((x[2] - x[0]).dot(&n).sq() / n.norm_sq()) * (0.5 * k)
+            }
+            Primitive::Coupling(ref c) => c.energy(x, s, k),
             Primitive::Spring {
                 rest_length_m,
                 damping_n_s_m,
@@ -199,6 +218,8 @@ impl Primitive {
                 (angle_of_chord(((x[3] - x[2]) - (x[1] - x[0])).norm()) - limit_rad).max(0.0)
             }
             Primitive::Perpendicular => (x[1] - x[0]).dot(&(x[3] - x[2])).clamp(-1.0, 1.0).asin().abs(),
+            Primitive::PointOnPlane => (x[2] - x[0]).dot(&(x[1] - x[0]).normalize()).abs(),
+            // Measured from the poses by the joint set (it needs the bodies' orientations).
             _ => 0.0,
         }
     }
@@ -342,6 +363,49 @@ mod tests {
             push("direction", Primitive::Direction, dirs);
             push("angle limit", Primitive::AngleLimit { limit_rad: 0.6 * angle }, dirs);
             push("perpendicular", Primitive::Perpendicular, dirs);
+            push("point on plane", Primitive::PointOnPlane, axis_pb);
+            // Couplings: a hinge angle of (a, b) driving a slider position of (a, b), and a
+            // damped spring on the slider alone.
+            let angle = super::super::Measure::Angle {
+                a,
+                b,
+                axis_a: rvec(rng, 1.0).normalize(),
+                ref_a: Vector3::x(),
+                ref_b: Vector3::x(),
+            };
+            let position = super::super::Measure::Position {
+                a,
+                b,
+                anchor_a: rvec(rng, 0.3),
+                anchor_b: rvec(rng, 0.3),
+                axis_a: rvec(rng, 1.0).normalize(),
+            };
+            let coord = |m, q0: f64, r: &mut StdRng| super::super::coupling::CoupledCoordinate {
+                measure: m,
+                q0,
+                axis: rvec(r, 1.0).normalize().into(),
+            };
+            let ca = coord(angle, 0.3, rng);
+            let cb = coord(position, -0.02, rng);
+            let mimic = Coupling {
+                a: Some(ca),
+                b: cb,
+                multiplier: 0.7,
+                offset: 0.01,
+                damping: 0.4,
+                hard: true,
+            };
+            let spring = Coupling {
+                a: None,
+                b: cb,
+                multiplier: 0.0,
+                offset: 0.05,
+                damping: 2.0,
+                hard: false,
+            };
+            push("coupling, mimic", Primitive::Coupling(mimic), mimic.nodes());
+            push("coupling, spring", Primitive::Coupling(spring), spring.nodes());
+            let mut push = |name: &str, p: Primitive, n: [Node; 4]| out.push((format!("{name} ({side})"), p, n));
             push(
                 "spring",
                 Primitive::Spring {
