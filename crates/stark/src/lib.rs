@@ -13,6 +13,7 @@ pub mod geometry;
 pub mod io;
 pub mod presets;
 pub mod rigidbodies;
+pub mod robots;
 pub mod scenes;
 pub mod simulation;
 pub mod solver;

@@ -32,7 +32,7 @@ pub enum MeshFileError {
         path: PathBuf,
     },
     /// [`load_mesh`] does not know the extension.
-    #[error("unknown mesh file extension `{extension}` in '{}' (expected .obj, .stl, .vtk, .msh)", path.display())]
+    #[error("unknown mesh file extension `{extension}` in '{}' (expected .obj, .stl, .dae, .vtk, .msh)", path.display())]
     UnknownExtension {
         /// The path as given.
         path: PathBuf,
@@ -61,6 +61,14 @@ pub enum MeshFileError {
         /// The path as given.
         path: PathBuf,
         /// stl_io's error.
+        source: io::Error,
+    },
+    /// mesh-loader rejected the COLLADA file.
+    #[error("'{}': cannot parse COLLADA: {source}", path.display())]
+    Collada {
+        /// The path as given.
+        path: PathBuf,
+        /// mesh-loader's error.
         source: io::Error,
     },
     /// The VTK reader failed (its message names the file and line).
@@ -159,6 +167,11 @@ pub fn load_mesh(path: impl AsRef<Path>) -> Result<LoadedMesh, MeshFileError> {
             tets: Vec::new(),
         }),
         Some("stl") => load_stl(path).map(|m| LoadedMesh {
+            vertices: m.vertices,
+            triangles: m.elements,
+            tets: Vec::new(),
+        }),
+        Some("dae") => load_collada(path).map(|m| LoadedMesh {
             vertices: m.vertices,
             triangles: m.elements,
             tets: Vec::new(),
@@ -307,6 +320,45 @@ pub fn load_stl(path: impl AsRef<Path>) -> Result<Mesh<3>, MeshFileError> {
             .collect(),
         elements: indexed.faces.iter().map(|f| f.vertices).collect(),
     };
+    weld(path, mesh)
+}
+
+/// Loads the triangles of every mesh of a COLLADA (`.dae`) file with mesh-loader (node
+/// transforms and the `<unit>` scale applied, so positions are in metres); the meshes are merged
+/// and coincident corners (COLLADA exporters often write one vertex per triangle corner) welded
+/// into shared vertices. `up_axis` is not applied (URDF meshes are Z up).
+///
+/// # Errors
+/// [`MeshFileError::NotFound`], [`MeshFileError::Io`] or [`MeshFileError::Collada`].
+pub fn load_collada(path: impl AsRef<Path>) -> Result<Mesh<3>, MeshFileError> {
+    let path = path.as_ref();
+    let bytes = read_to_bytes(path)?;
+    let scene = mesh_loader::Loader::default()
+        .load_collada_from_slice(&bytes, path)
+        .map_err(|source| MeshFileError::Collada {
+            path: path.to_owned(),
+            source,
+        })?;
+    let mut mesh = Mesh {
+        vertices: Vec::new(),
+        elements: Vec::new(),
+    };
+    for m in &scene.meshes {
+        let base = mesh.vertices.len();
+        mesh.vertices.extend(
+            m.vertices
+                .iter()
+                .map(|v| Vector3::new(v[0] as f64, v[1] as f64, v[2] as f64)),
+        );
+        mesh.elements
+            .extend(m.faces.iter().map(|f| f.map(|i| base + i as usize)));
+    }
+    if mesh.elements.is_empty() {
+        return Err(MeshFileError::NoElements {
+            path: path.to_owned(),
+            what: "triangles",
+        });
+    }
     weld(path, mesh)
 }
 
@@ -754,7 +806,7 @@ mod tests {
         let err = load_mesh("foo.xyz").unwrap_err();
         assert_eq!(
             err.to_string(),
-            "unknown mesh file extension `.xyz` in 'foo.xyz' (expected .obj, .stl, .vtk, .msh)"
+            "unknown mesh file extension `.xyz` in 'foo.xyz' (expected .obj, .stl, .dae, .vtk, .msh)"
         );
         let err = load_mesh("foo").unwrap_err();
         assert!(matches!(err, MeshFileError::UnknownExtension { ref extension, .. } if extension.is_empty()));

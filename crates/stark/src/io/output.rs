@@ -108,7 +108,9 @@ impl Output {
                 OutputCells::Triangles(t) => VtkCells::Triangles(t),
                 OutputCells::Tets(t) => VtkCells::Tets(t),
             };
-            let path = directory.join(format!("{name}_{}_{:05}.vtk", mesh.label, self.frames_written));
+            // Robot links are labelled `<robot>/<link>`: no directory separator in file names.
+            let file_label = mesh.label.replace(['/', '\\'], "-");
+            let path = directory.join(format!("{name}_{file_label}_{:05}.vtk", self.frames_written));
             VtkWriter::new(&self.scratch_x, cells)
                 .title(&format!("{name} {} frame {}", mesh.label, self.frames_written))
                 .point_vectors("velocity", &self.scratch_v)
