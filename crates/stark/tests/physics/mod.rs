@@ -25,5 +25,6 @@ pub mod rigid_box_rests_on_soft_block;
 pub mod rigid_box_stack_rests;
 pub mod servo_reaches_and_holds;
 pub mod stark_replicas_match_reference;
+pub mod urdf_pendulums;
 pub mod urdf_robots_import;
 pub mod velocity_controllers_cap_their_effort;
