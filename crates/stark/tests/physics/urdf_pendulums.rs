@@ -162,6 +162,9 @@ fn urdf_pendulum_period_matches_the_physical_pendulum() {
     let g = 9.81;
     let exact = 2.0 * std::f64::consts::PI * ((i_cm + m * l * l) / (m * g * l)).sqrt() * (1.0 + theta0 * theta0 / 16.0);
     let err = (period - exact) / exact;
-    println!("URDF pendulum: period {period:.5} s, physical pendulum {exact:.5} s, error {:.3}%", 100.0 * err);
+    println!(
+        "URDF pendulum: period {period:.5} s, physical pendulum {exact:.5} s, error {:.3}%",
+        100.0 * err
+    );
     assert!(err.abs() < 0.01, "period {period} s vs {exact} s");
 }
