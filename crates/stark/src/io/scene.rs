@@ -66,6 +66,7 @@
 //! ```
 
 mod rigid;
+mod robot;
 
 pub use rigid::{JointType, SceneRigidBody};
 
@@ -111,8 +112,12 @@ pub struct LoadedScene {
     /// The `[[attachment]]` entries in file order, with their labels.
     pub attachments: Vec<(String, AttachmentHandle)>,
     /// The joints in creation order: the fix joints of fixed rigid bodies (`<body>.fixed`), in
-    /// the order of the bodies, then the `[[joint]]` entries in file order.
+    /// the order of the bodies, then the `[[joint]]` entries in file order, then the joints of
+    /// the robots.
     pub joints: Vec<JointHandle>,
+    /// The `[[robot]]` entries in file order (their links with a collision mesh are also
+    /// rigid-body objects, named `<robot>/<link>`).
+    pub robots: Vec<crate::robots::Robot>,
 }
 
 impl LoadedScene {
@@ -423,6 +428,8 @@ struct SceneFile {
     rigid_body: Vec<rigid::RigidBodyEntry>,
     #[serde(default)]
     joint: Vec<rigid::JointEntry>,
+    #[serde(default)]
+    robot: Vec<robot::RobotEntry>,
 }
 
 #[derive(Deserialize)]
@@ -665,7 +672,8 @@ impl At {
 }
 
 /// Entry arrays whose items are described by name rather than by index.
-const ENTRY_KINDS: [&str; 11] = [
+const ENTRY_KINDS: [&str; 12] = [
+    "robot",
     "surface",
     "volume",
     "line",
@@ -1939,6 +1947,29 @@ fn build(
         objects.push((e.name.clone(), SceneObject::RigidBody(h)));
         joints.extend(fix);
     }
+    let mut robots = Vec::new();
+    for (i, e) in file.robot.iter().enumerate() {
+        let at = At::entry("robot", i);
+        if e.name.is_empty() || objects.iter().any(|(n, _)| n == &e.name) {
+            return Err(ctx.err(
+                &at.key("name"),
+                format!("robot name '{}' is empty or already used", e.name),
+            ));
+        }
+        let r = robot::build_robot(&mut sim, ctx, base_dir, &at, e)?;
+        for mesh in &r.collision_meshes {
+            let label = sim.rigid_bodies.labels[mesh.body.i()].clone();
+            objects.push((
+                label,
+                SceneObject::RigidBody(SceneRigidBody {
+                    body: mesh.body,
+                    nodes: mesh.nodes,
+                    contact: Some(mesh.contact),
+                }),
+            ));
+        }
+        robots.push(r);
+    }
     for (i, e) in file.friction.iter().enumerate() {
         add_friction(&mut sim, ctx, &At::entry("friction", i), &objects, e)?;
     }
@@ -1981,8 +2012,13 @@ fn build(
         };
         joints.push(rigid::build_joint(&mut sim, ctx, &at, &objects, e, &name)?);
     }
+    for r in &robots {
+        joints.extend(r.joints.values().cloned());
+        joints.extend(r.extra_joints.iter().cloned());
+    }
     add_gravity_ramps(&mut sim, ctx, &file.gravity_ramp)?;
     Ok(LoadedScene {
+        robots,
         simulation: sim,
         duration_s: file.duration_s,
         name,

@@ -34,7 +34,7 @@
 
 use crate::error::{Result, StarkError};
 use crate::rigidbodies::joints::{JointHandle, JointParams, DEFAULT_CONTROLLER_DELAY};
-use crate::rigidbodies::{RigidBodyHandle, Shape};
+use crate::rigidbodies::{RigidBodyHandle, RigidMeshHandle, Shape};
 use crate::simulation::Simulation;
 use nalgebra::{Isometry3, Matrix3, Translation3, Unit, UnitQuaternion, Vector3};
 use std::collections::{BTreeMap, HashMap, VecDeque};
@@ -200,6 +200,9 @@ pub struct Robot {
     pub bodies: Vec<(String, RigidBodyHandle)>,
     /// Initial coordinate of each joint (the URDF coordinate is this plus the joint state's).
     pub initial_positions: BTreeMap<String, f64>,
+    /// The collision mesh of each body that has one (a body's `<collision>` elements are one
+    /// mesh).
+    pub collision_meshes: Vec<RigidMeshHandle>,
 }
 
 impl Robot {
@@ -896,6 +899,7 @@ impl Simulation {
             bodies.push((link.clone(), body));
         }
         let body_of_link = |l: usize| body_of_top.get(&group[l]).copied();
+        let mut collision_meshes = Vec::new();
         for &top in &tops {
             let (Some(body), Some((vertices, triangles, thickness))) = (body_of_top.get(&top), collision.remove(&top))
             else {
@@ -906,7 +910,7 @@ impl Simulation {
                 .or(self.settings.contact.default_thickness_m)
             {
                 Some(t) => {
-                    self.add_rigid_collision_mesh(*body, &vertices, &triangles, Some(t))?;
+                    collision_meshes.push(self.add_rigid_collision_mesh(*body, &vertices, &triangles, Some(t))?);
                 }
                 None => {
                     self.add_rigid_output_mesh(*body, &vertices, &triangles)?;
@@ -1161,6 +1165,7 @@ impl Simulation {
             extra_joints: extra,
             bodies,
             initial_positions,
+            collision_meshes,
         })
     }
 }

@@ -101,7 +101,7 @@ pub(super) struct RigidBodyEntry {
 // Small checks
 // ------------------------------------------------------------------------------------------
 
-fn finite(ctx: &Ctx, at: &At, key: &str, v: [f64; 3]) -> Res<Vector3<f64>> {
+pub(super) fn finite(ctx: &Ctx, at: &At, key: &str, v: [f64; 3]) -> Res<Vector3<f64>> {
     if v.iter().all(|c| c.is_finite()) {
         Ok(Vector3::from(v))
     } else {
@@ -120,7 +120,7 @@ fn direction(ctx: &Ctx, at: &At, key: &str, v: [f64; 3]) -> Res<Vector3<f64>> {
 
 /// An orientation from `rotate_deg = { angle, axis }` or `quaternion_wxyz = [w, x, y, z]`
 /// (normalised); `None` if neither is given.
-fn orientation(
+pub(super) fn orientation(
     ctx: &Ctx,
     at: &At,
     rotate: Option<&Rotate>,
