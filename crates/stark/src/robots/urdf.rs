@@ -440,6 +440,9 @@ fn check_inertia(j: &Matrix3<f64>) -> std::result::Result<(), String> {
     Ok(())
 }
 
+/// A mesh in a body's frame: vertices, triangles and its contact thickness, if overridden.
+type BodyMesh = (Vec<Vector3<f64>>, Vec<[usize; 3]>, Option<f64>);
+
 /// A link's mass, centre of mass and inertia about it, in the link frame.
 #[derive(Clone, Copy)]
 struct LinkMass {
@@ -704,15 +707,6 @@ impl Simulation {
             let massless = masses[l].is_none();
             if fixed && (options.merge_fixed_joints || massless || masses[parent].is_none()) {
                 group[l] = group[parent];
-            } else if massless && !children[l].is_empty() {
-                return Err(src.err(
-                    link_line(&robot.links[l].name),
-                    &format!("link '{}'", robot.links[l].name),
-                    format!(
-                        "has no mass but moves on the {:?} joint '{}': give it an <inertial> (or a mass_kg override)",
-                        j.joint_type, j.name
-                    ),
-                ));
             } else if massless {
                 return Err(src.err(
                     link_line(&robot.links[l].name),
@@ -780,8 +774,9 @@ impl Simulation {
 
         // ---- Collision and visual geometry (loaded before anything is added) ----
         let roots_paths = &options.package_paths;
-        let mut collision: HashMap<usize, (Vec<Vector3<f64>>, Vec<[usize; 3]>, Option<f64>)> = HashMap::new();
-        let mut visuals: Vec<(usize, Vec<Vector3<f64>>, Vec<[usize; 3]>)> = Vec::new();
+        // Per group: body-frame vertices, triangles and a contact thickness override.
+        let mut collision: HashMap<usize, BodyMesh> = HashMap::new();
+        let mut visuals: Vec<(usize, BodyMesh)> = Vec::new();
         let to_body = |top: usize, p: Vector3<f64>| -> Vector3<f64> {
             match groups.get(&top) {
                 Some(g) => g.orientation.inverse() * (p - g.com),
@@ -842,7 +837,7 @@ impl Simulation {
                         .iter()
                         .map(|p| to_body(top, (frame * nalgebra::Point3::from(*p)).coords))
                         .collect();
-                    visuals.push((top, local, mesh.elements));
+                    visuals.push((top, (local, mesh.elements, None)));
                 }
             }
         }
@@ -917,7 +912,7 @@ impl Simulation {
                 }
             }
         }
-        for (top, vertices, triangles) in visuals {
+        for (top, (vertices, triangles, _)) in visuals {
             if let Some(body) = body_of_top.get(&top) {
                 self.add_rigid_output_mesh(*body, &vertices, &triangles)?;
             }

@@ -1373,7 +1373,7 @@ impl Simulation {
         let child = handle(child).ok_or_else(|| StarkError::InvalidInput(format!("joint '{label}': no body")))?;
         let mut j = Builder::new(self, label, handle(parent), Some(child), params)?;
         let nodes = c.nodes();
-        j.push(Primitive::Coupling(c), &nodes);
+        j.push(Primitive::Coupling(Box::new(c)), &nodes);
         Ok(j.finish())
     }
 

@@ -62,7 +62,7 @@ pub enum Primitive {
     /// A linear relation between two joint coordinates (mimic), or a spring–damper on one
     /// (nodes: parent and child of each coordinate; see [`Coupling`]). Hard if `hard`. Violation:
     /// rad or m, of the following coordinate.
-    Coupling(Coupling),
+    Coupling(Box<Coupling>),
     /// Relative velocity of b's point with respect to a's along the unit direction a1 − a0 driven
     /// to a target with a capped force (nodes: a0, a1, b at a0). Soft.
     LinearVelocity {
@@ -403,8 +403,12 @@ mod tests {
                 damping: 2.0,
                 hard: false,
             };
-            push("coupling, mimic", Primitive::Coupling(mimic), mimic.nodes());
-            push("coupling, spring", Primitive::Coupling(spring), spring.nodes());
+            push("coupling, mimic", Primitive::Coupling(Box::new(mimic)), mimic.nodes());
+            push(
+                "coupling, spring",
+                Primitive::Coupling(Box::new(spring)),
+                spring.nodes(),
+            );
             let mut push = |name: &str, p: Primitive, n: [Node; 4]| out.push((format!("{name} ({side})"), p, n));
             push(
                 "spring",
