@@ -264,9 +264,9 @@ fn constant(v: f64) -> PyResult<Expr> {
     Expr::wrap(Sym::constant(v))
 }
 
-/// The `starkrs._starkrs.sym` module (re-exported with vectors and matrices by `starkrs.sym`).
+/// The `starkrs._starkrs._sym` module (re-exported with vectors and matrices by `starkrs.sym`).
 pub fn module(py: Python<'_>) -> PyResult<Bound<'_, PyModule>> {
-    let m = PyModule::new(py, "sym")?;
+    let m = PyModule::new(py, "_sym")?;
     m.add_class::<Expr>()?;
     m.add_class::<Condition>()?;
     m.add_function(wrap_pyfunction!(sqrt, &m)?)?;

@@ -49,7 +49,7 @@ def test_stub_files_ship_with_the_package():
 
 def test_module_stub_matches_the_runtime():
     top, classes = stub_names(PACKAGE / "__init__.pyi")
-    runtime = public(_starkrs) - {"geometry", "meshes", "sym"}
+    runtime = public(_starkrs) - {"geometry", "meshes"}
     assert runtime - top == set(), "missing in __init__.pyi"
     assert top - runtime - ALIASES == set(), "in __init__.pyi but not at run time"
     for name, members in classes.items():

@@ -12,7 +12,7 @@ functions of this module; a comparison ``a > b`` is not a bool, it is a conditio
 
 from . import _starkrs
 
-_s = _starkrs.sym
+_s = _starkrs._sym
 Expr = _s.Expr
 Condition = _s.Condition
 EnergyHandle = _s.EnergyHandle
