@@ -52,9 +52,9 @@ fn active(trace: u64) -> PyResult<()> {
 }
 
 fn current() -> PyResult<u64> {
-    CURRENT.with(|c| c.get()).ok_or_else(|| {
-        stark_err("starkrs.sym values can only be made inside an energy function called by add_energy")
-    })
+    CURRENT
+        .with(|c| c.get())
+        .ok_or_else(|| stark_err("starkrs.sym values can only be made inside an energy function called by add_energy"))
 }
 
 /// An operand: a symbolic scalar of the current trace or a Python number.
@@ -184,7 +184,11 @@ impl Expr {
         active(self.trace)?;
         let b = operand(o)?.ok_or_else(|| PyTypeError::new_err("compare a symbolic value with a number or symbol"))?;
         let (a, b) = if flip { (b, self.sym) } else { (self.sym, b) };
-        Ok(Condition { a, b, trace: self.trace })
+        Ok(Condition {
+            a,
+            b,
+            trace: self.trace,
+        })
     }
 }
 
@@ -401,6 +405,11 @@ impl Simulation {
         r#fn: &Bound<'_, PyAny>,
         params: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<EnergyHandle> {
+        if CURRENT.with(|c| c.get()).is_some() {
+            return Err(stark_err(format!(
+                "energy '{name}': add_energy cannot be called inside another energy's function"
+            )));
+        }
         if !r#fn.is_callable() {
             return Err(PyTypeError::new_err(format!("energy '{name}': fn must be callable")));
         }
@@ -421,7 +430,9 @@ impl Simulation {
                 let mut out = Vec::new();
                 for (i, el) in els.try_iter()?.enumerate() {
                     let idx: Vec<i64> = el?.extract().map_err(|_| {
-                        PyTypeError::new_err(format!("energy '{name}': element {i} is not a sequence of node indices"))
+                        PyTypeError::new_err(format!(
+                            "energy '{name}': element {i} is not a sequence of node indices"
+                        ))
                     })?;
                     let mut row = Vec::with_capacity(idx.len());
                     for k in idx {
@@ -467,6 +478,7 @@ impl Simulation {
                     .call_method1("_call", (name, r#fn, vecs(&a.x), vecs(&a.v), wrap(a.dt), ps, &layout))
                     .and_then(|r| {
                         if let Ok(e) = r.cast::<Expr>() {
+                            active(e.get().trace)?;
                             return Ok(e.get().sym);
                         }
                         if r.cast::<pyo3::types::PyBool>().is_err() {
@@ -498,7 +510,12 @@ impl Simulation {
             params: user_names,
             nodes_per_element: k,
             num_elements: elements.len(),
-            compile_info: (trace_ms, timings.differentiate_ms, timings.compile_ms, timings.from_disk),
+            compile_info: (
+                trace_ms,
+                timings.differentiate_ms,
+                timings.compile_ms,
+                timings.from_disk,
+            ),
             handle,
             sim: self.id(),
         })

@@ -157,6 +157,11 @@ def test_bad_energies_are_clear_errors(settings):
     with pytest.raises(starkrs.StarkError, match="outside the energy function"):
         kept[0] + 1.0
 
+    with pytest.raises(starkrs.StarkError, match="cannot be called inside another energy"):
+        sim.add_energy("outer", cube, None, lambda x, v, dt, p: sim.add_energy("inner", cube, None, spring_to_anchor, ok), ok)
+    with pytest.raises(starkrs.StarkError, match="outside the energy function"):
+        sim.add_energy("stale", cube, None, lambda x, v, dt, p: kept[0], ok)
+
     h = sim.add_energy("fine", cube, None, spring_to_anchor, ok)
     with pytest.raises(starkrs.StarkError, match="energy 'fine': parameter 'c' is NaN"):
         sim.set_energy_params(h, {"c": float("nan")})

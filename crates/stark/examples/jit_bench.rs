@@ -49,7 +49,10 @@ fn main() {
         Vector3::new(0.0, 0.1, 0.0),
         Vector3::new(0.0, 0.0, 0.1),
     ];
-    let x0: Vec<_> = rest.iter().map(|p| p * 1.02 + Vector3::new(0.001, -0.002, 0.0)).collect();
+    let x0: Vec<_> = rest
+        .iter()
+        .map(|p| p * 1.02 + Vector3::new(0.001, -0.002, 0.0))
+        .collect();
     let v = vec![
         Vector3::new(0.1, 0.0, -0.2),
         Vector3::new(0.0, 0.3, 0.1),
@@ -65,7 +68,8 @@ fn main() {
     };
     let params = TetStrainParams::default();
     let mut tets = TetStrain::default();
-    tets.add(&st.nodes, set, "tet", &[[0, 1, 2, 3]], params.clone()).unwrap();
+    tets.add(&st.nodes, set, "tet", &[[0, 1, 2, 3]], params.clone())
+        .unwrap();
     let stencil = Stencil::new(tets.nodes(0), &eval);
 
     // 1. Kernel against kernel.
@@ -73,7 +77,21 @@ fn main() {
     let (mu_, lambda_) = (4.0 / 3.0 * mu, lambda + 5.0 / 6.0 * mu);
     let dm = Matrix3::from_columns(&[rest[1] - rest[0], rest[2] - rest[0], rest[3] - rest[0]]);
     let volume = dm.determinant() / 6.0;
-    let psi = [volume, mu_, lambda_, 1.0 + 0.75 * mu_ / lambda_, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0];
+    let psi = [
+        volume,
+        mu_,
+        lambda_,
+        1.0 + 0.75 * mu_ / lambda_,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        1.0,
+        0.0,
+    ];
     let f = [1.02, 0.01, -0.02, 0.0, 0.98, 0.03, 0.01, 0.0, 1.05];
     let specs = kernels();
     let spec = &specs[0];
@@ -82,10 +100,16 @@ fn main() {
     let psi_ms = t.elapsed().as_secs_f64() * 1e3;
     let n = 200_000;
     let (mut g, mut h) = ([0.0; 9], [0.0; 81]);
-    let builtin_kernel = per_call(n, || generated::tet_psi_elastic(black_box(&f), &psi, &mut g, &mut h) + h[40]);
+    let builtin_kernel = per_call(n, || {
+        generated::tet_psi_elastic(black_box(&f), &psi, &mut g, &mut h) + h[40]
+    });
     let (mut g2, mut h2) = ([0.0; 9], [0.0; 81]);
     let jit_kernel = per_call(n, || psi_jit.evaluate(black_box(&f), &psi, &mut g2, &mut h2) + h2[40]);
-    let diff = g.iter().chain(&h).zip(g2.iter().chain(&h2)).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+    let diff = g
+        .iter()
+        .chain(&h)
+        .zip(g2.iter().chain(&h2))
+        .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
     println!("Ψ(F) kernel (9 inputs): built-in {builtin_kernel:.3} µs, JIT {jit_kernel:.3} µs ({:.2}×), max |difference| {diff:.1e}, traced+compiled in {psi_ms:.1} ms", jit_kernel / builtin_kernel);
 
     // 2. Element against element.
@@ -110,11 +134,24 @@ fn main() {
         user.derivatives(0, black_box(&stencil), false, &mut d2);
         d2.hess[1][1][1][1]
     });
-    let scale = d.hess.as_flattened().as_flattened().as_flattened().iter().fold(0.0f64, |m, x| m.max(x.abs()));
-    let diff = d.hess.as_flattened().as_flattened().as_flattened().iter()
+    let scale = d
+        .hess
+        .as_flattened()
+        .as_flattened()
+        .as_flattened()
+        .iter()
+        .fold(0.0f64, |m, x| m.max(x.abs()));
+    let diff = d
+        .hess
+        .as_flattened()
+        .as_flattened()
+        .as_flattened()
+        .iter()
         .zip(d2.hess.as_flattened().as_flattened().as_flattened())
         .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
-    let dual = per_call(n / 20, || stark::energy::potential::dual_derivatives(&tets, 0, black_box(&stencil)).value);
+    let dual = per_call(n / 20, || {
+        stark::energy::potential::dual_derivatives(&tets, 0, black_box(&stencil)).value
+    });
     println!("tet element, value+gradient+Hessian in node positions (12 inputs): built-in {builtin_el:.3} µs, JIT UserEnergy {jit_el:.3} µs ({:.2}×), hyper-duals {dual:.2} µs; Hessian relative difference {:.1e}", jit_el / builtin_el, diff / scale);
 
     // 3. Trace / differentiate / compile per energy.
@@ -123,7 +160,9 @@ fn main() {
     println!("energy | inputs | program ops | trace ms | differentiate ms | compile ms | with disk cache: differentiate + compile ms | memory cache µs");
     type Energy = fn(&stark::energy::ElementArgs<Sym>) -> stark::Result<Sym>;
     let cases: [(&str, usize, usize, Energy); 3] = [
-        ("magnet −k/√(r²+ε²)", 1, 5, |a| Ok(stark::scenes::magnet_energy(&a.x[0], &a.p))),
+        ("magnet −k/√(r²+ε²)", 1, 5, |a| {
+            Ok(stark::scenes::magnet_energy(&a.x[0], &a.p))
+        }),
         ("spring + damper", 2, 3, |a| {
             let d = a.x[1] - a.x[0];
             let dv = a.v[1] - a.v[0];

@@ -453,7 +453,10 @@ mod tests {
                 for e in 0..tets.num_elements() {
                     let stencil = Stencil::new(tets.nodes(e), &eval);
                     let mut builtin = HyperDual::<4>::constant(0.0);
-                    assert_eq!(tets.derivatives(e, &stencil, false, &mut builtin), FastDerivatives::Exact);
+                    assert_eq!(
+                        tets.derivatives(e, &stencil, false, &mut builtin),
+                        FastDerivatives::Exact
+                    );
                     let (p, _) = tets.kernel_params(e, &stencil);
                     let mut x = [0.0; 12];
                     crate::energy::flat_from_points(&stencil.x, &mut x);

@@ -101,6 +101,31 @@ impl JitKernel {
         unsafe { (self.full)(x.as_ptr(), p.as_ptr(), grad.as_mut_ptr(), hess.as_mut_ptr()) }
     }
 
+    /// Value, gradient and Hessian with respect to the stencil positions `x` (the kernel's
+    /// inputs, 3 per node) with parameters `p`, written into `out`: what a hand-written
+    /// [`Potential`](super::Potential) returns from `derivatives` to use this kernel instead of
+    /// hyper-duals.
+    ///
+    /// # Panics
+    /// When the kernel was not traced for `3·N` inputs and `p.len()` parameters.
+    #[inline]
+    pub fn derivatives<const N: usize>(
+        &self,
+        x: &[nalgebra::Vector3<f64>; N],
+        p: &[f64],
+        out: &mut super::HyperDual<N>,
+    ) -> super::FastDerivatives {
+        let mut flat = [0.0; 3 * super::user_energy::MAX_NODES];
+        super::tensor::flat_from_points(x, &mut flat);
+        out.value = self.evaluate(
+            &flat[..3 * N],
+            p,
+            out.grad.as_flattened_mut(),
+            out.hess.as_flattened_mut().as_flattened_mut().as_flattened_mut(),
+        );
+        super::FastDerivatives::Exact
+    }
+
     /// The value alone (line searches).
     ///
     /// # Panics
@@ -126,8 +151,11 @@ pub fn compile_fn(
     compile(&traced)
 }
 
-fn memory_cache() -> &'static Mutex<HashMap<u64, Vec<(TracedEnergy, Arc<JitKernel>)>>> {
-    static CACHE: OnceLock<Mutex<HashMap<u64, Vec<(TracedEnergy, Arc<JitKernel>)>>>> = OnceLock::new();
+/// Compiled kernels by hash; each hash keeps its graphs, so a collision is never served.
+type MemoryCache = Mutex<HashMap<u64, Vec<(TracedEnergy, Arc<JitKernel>)>>>;
+
+fn memory_cache() -> &'static MemoryCache {
+    static CACHE: OnceLock<MemoryCache> = OnceLock::new();
     CACHE.get_or_init(Default::default)
 }
 
@@ -245,7 +273,11 @@ extern "C" fn jit_powi(x: f64, k: i32) -> f64 {
 /// Compile the full and the value-only function of one energy into one module.
 fn lower(program: &Program, traced: &TracedEnergy) -> Result<(FullFn, ValueFn)> {
     let mut flags = settings::builder();
-    for (k, v) in [("use_colocated_libcalls", "false"), ("is_pic", "false"), ("opt_level", "speed")] {
+    for (k, v) in [
+        ("use_colocated_libcalls", "false"),
+        ("is_pic", "false"),
+        ("opt_level", "speed"),
+    ] {
         flags.set(k, v).map_err(|e| jit_err("settings", e))?;
     }
     let isa = cranelift_native::builder()

@@ -750,7 +750,6 @@ fn emit(g: &Graph, spec: &KernelSpec, value: Id, grad: &[Id], hess: &[Vec<Id>]) 
     out
 }
 
-
 // ---------------------------------------------------------------------------------------------
 // Run-time tracing (the JIT path, `energy::jit`): a traced energy as data rather than source.
 
@@ -798,10 +797,9 @@ impl TracedOp {
     pub fn operands(&self) -> impl Iterator<Item = u32> {
         let (a, b, c, d) = match *self {
             TracedOp::Const(_) | TracedOp::Input(_) | TracedOp::Param(_) => (None, None, None, None),
-            TracedOp::Add(a, b)
-            | TracedOp::Sub(a, b)
-            | TracedOp::Mul(a, b)
-            | TracedOp::Atan2(a, b) => (Some(a), Some(b), None, None),
+            TracedOp::Add(a, b) | TracedOp::Sub(a, b) | TracedOp::Mul(a, b) | TracedOp::Atan2(a, b) => {
+                (Some(a), Some(b), None, None)
+            }
             TracedOp::Neg(a)
             | TracedOp::Recip(a)
             | TracedOp::Sqrt(a)

@@ -251,17 +251,7 @@ impl<const N: usize> Potential<N> for UserEnergy<N> {
         })
     }
     fn derivatives(&self, e: usize, stencil: &Stencil<N>, _project: bool, out: &mut HyperDual<N>) -> FastDerivatives {
-        self.with_params(e, stencil, |p| {
-            let mut flat = [0.0; 3 * MAX_NODES];
-            super::tensor::flat_from_points(&stencil.x, &mut flat);
-            out.value = self.kernel.evaluate(
-                &flat[..3 * N],
-                p,
-                out.grad.as_flattened_mut(),
-                out.hess.as_flattened_mut().as_flattened_mut().as_flattened_mut(),
-            );
-        });
-        FastDerivatives::Exact
+        self.with_params(e, stencil, |p| self.kernel.derivatives(&stencil.x, p, out))
     }
 }
 
@@ -321,10 +311,7 @@ pub fn user_energy_term(
         params: &[f64],
         traced: TracedEnergy,
     ) -> Result<Box<dyn UserEnergyTerm>> {
-        let els = elements
-            .iter()
-            .map(|e| std::array::from_fn(|a| e[a]))
-            .collect();
+        let els = elements.iter().map(|e| std::array::from_fn(|a| e[a])).collect();
         Ok(Box::new(PotentialTerm::new(UserEnergy::<N>::new(
             name, els, names, params, traced,
         )?)))
@@ -369,7 +356,11 @@ mod tests {
     }
 
     fn rvec(rng: &mut rand::rngs::StdRng, s: f64) -> Vector3<f64> {
-        Vector3::new(rng.random_range(-s..s), rng.random_range(-s..s), rng.random_range(-s..s))
+        Vector3::new(
+            rng.random_range(-s..s),
+            rng.random_range(-s..s),
+            rng.random_range(-s..s),
+        )
     }
 
     fn nodes_state(rng: &mut rand::rngs::StdRng, x0: Vec<Vector3<f64>>) -> TestState {
@@ -386,7 +377,11 @@ mod tests {
             // node 1 mm from the magnet.
             let degenerate = case >= 6;
             let a = rvec(&mut rng, 1.0);
-            let b = if degenerate { a + rvec(&mut rng, 1e-4) } else { rvec(&mut rng, 1.0) };
+            let b = if degenerate {
+                a + rvec(&mut rng, 1e-4)
+            } else {
+                rvec(&mut rng, 1.0)
+            };
             let st = nodes_state(&mut rng, vec![a, b]);
             let e = UserEnergy::<2>::new(
                 "spring",
@@ -425,7 +420,7 @@ mod tests {
             let d = S::select_gt(a, S::constant(0.5), || (a - 0.5).powi(3), || -a);
             a * b + c + d + x[0].powi(-2) + x[1].powi(5) + x[2].powi(13) * 0.01
         }
-        let kernel = jit::compile_fn(3, 2, |x, p| f(x, p)).unwrap();
+        let kernel = jit::compile_fn(3, 2, f).unwrap();
         let mut rng = rand::rngs::StdRng::seed_from_u64(3);
         for _ in 0..20 {
             let x: Vec<f64> = (0..3).map(|_| rng.random_range(0.2..1.5)).collect();
@@ -442,7 +437,12 @@ mod tests {
                 assert!((g[i] - r.grad[0][i]).abs() < 1e-10 * (1.0 + g[i].abs()), "grad {i}");
             }
             for k in 0..9 {
-                assert!((h[k] - hd[k]).abs() < 1e-9 * (1.0 + hd[k].abs()), "hess {k}: {} {}", h[k], hd[k]);
+                assert!(
+                    (h[k] - hd[k]).abs() < 1e-9 * (1.0 + hd[k].abs()),
+                    "hess {k}: {} {}",
+                    h[k],
+                    hd[k]
+                );
             }
         }
     }
@@ -452,7 +452,10 @@ mod tests {
         let traced = traced_spring();
         let a = jit::compile(&traced).unwrap();
         let b = jit::compile(&traced_spring()).unwrap();
-        assert!(Arc::ptr_eq(&a, &b), "the second trace of the same energy hits the memory cache");
+        assert!(
+            Arc::ptr_eq(&a, &b),
+            "the second trace of the same energy hits the memory cache"
+        );
         let dir = tempfile::tempdir().unwrap();
         let first = jit::compile_uncached(&traced, Some(dir.path().into())).unwrap();
         let second = jit::compile_uncached(&traced, Some(dir.path().into())).unwrap();
@@ -502,7 +505,9 @@ mod tests {
         let mut bodies = BodyArrays::default();
         for _ in 0..2 {
             bodies.position.push(rvec(&mut rng, 1.0));
-            bodies.orientation.push(UnitQuaternion::from_scaled_axis(rvec(&mut rng, 2.0)));
+            bodies
+                .orientation
+                .push(UnitQuaternion::from_scaled_axis(rvec(&mut rng, 2.0)));
             bodies.velocity.push(rvec(&mut rng, 1.0));
             bodies.angular_velocity.push(rvec(&mut rng, 2.0));
             bodies.mass.push(1.0);
@@ -513,11 +518,20 @@ mod tests {
             bodies.angular_acceleration.push(Vector3::zeros());
         }
         let body_v: Vec<_> = (0..2).map(|_| (rvec(&mut rng, 1.0), rvec(&mut rng, 2.0))).collect();
-        let st = TestState::new(vec![Vector3::x()], vec![Vector3::x()], vec![Vector3::zeros()], vec![Vector3::y()], 0.01)
-            .with_bodies(bodies, &body_v);
+        let st = TestState::new(
+            vec![Vector3::x()],
+            vec![Vector3::x()],
+            vec![Vector3::zeros()],
+            vec![Vector3::y()],
+            0.01,
+        )
+        .with_bodies(bodies, &body_v);
         let eval = st.eval();
         let elements = vec![
-            [Node::rigid(0, &Vector3::new(0.1, 0.0, 0.05)), Node::rigid(1, &Vector3::new(-0.1, 0.02, 0.0))],
+            [
+                Node::rigid(0, &Vector3::new(0.1, 0.0, 0.05)),
+                Node::rigid(1, &Vector3::new(-0.1, 0.02, 0.0)),
+            ],
             [Node::Point(0), Node::rigid(1, &Vector3::new(0.0, 0.1, 0.0))],
         ];
         let jit_term = PotentialTerm::new(
@@ -545,6 +559,52 @@ mod tests {
             }
         }
         assert!((jit_term.energy(&eval) - dual_term.energy(&eval)).abs() < 1e-12);
+    }
+
+    /// A hand-written potential opting into the JIT path: its generic `energy` stays the
+    /// hyper-dual oracle, `derivatives` runs the kernel compiled from the same function.
+    #[test]
+    fn a_hand_written_potential_can_use_the_jit_path() {
+        fn anchored<S: Scalar>(x: &Vec3<S>, p: &[S]) -> S {
+            let d = *x - Vec3::new(p[1], p[2], p[3]);
+            p[0] * (d.norm_sq() + 1e-4).sqrt()
+        }
+        struct Anchor {
+            kernel: Arc<JitKernel>,
+            params: [f64; 4],
+        }
+        impl Potential<1> for Anchor {
+            fn name(&self) -> &str {
+                "anchor"
+            }
+            fn num_elements(&self) -> usize {
+                2
+            }
+            fn nodes(&self, e: usize) -> [Node; 1] {
+                [Node::Point(e as u32)]
+            }
+            fn energy<S: Scalar>(&self, _e: usize, x: &[Vec3<S>; 1], _st: &Stencil<1>) -> S {
+                anchored(&x[0], &self.params.map(S::constant))
+            }
+            fn derivatives(
+                &self,
+                _e: usize,
+                st: &Stencil<1>,
+                _project: bool,
+                out: &mut HyperDual<1>,
+            ) -> FastDerivatives {
+                self.kernel.derivatives(&st.x, &self.params, out)
+            }
+        }
+        let anchor = Anchor {
+            kernel: jit::compile_fn(3, 4, |x, p| anchored(&Vec3::new(x[0], x[1], x[2]), p)).unwrap(),
+            params: [3.0, 0.1, -0.2, 0.3],
+        };
+        let mut rng = rand::rngs::StdRng::seed_from_u64(5);
+        let first = rvec(&mut rng, 1.0);
+        let st = nodes_state(&mut rng, vec![first, Vector3::new(0.1, -0.2, 0.3001)]);
+        // Fast path vs the hyper-duals of the hand-written generic energy to 1e-9, both vs FD.
+        assert_derivatives(&anchor, &st.eval(), 1e-7);
     }
 
     #[test]
@@ -582,14 +642,26 @@ mod tests {
 
         let mut sim = crate::Simulation::new(crate::Settings::default()).unwrap();
         let err = sim
-            .add_user_energy("spring", &[vec![Node::Point(0), Node::Point(5)]], names(), &[1.0, 2.0, 3.0], traced_spring())
+            .add_user_energy(
+                "spring",
+                &[vec![Node::Point(0), Node::Point(5)]],
+                names(),
+                &[1.0, 2.0, 3.0],
+                traced_spring(),
+            )
             .unwrap_err()
             .to_string();
         assert!(err.contains("energy 'spring': element 0 refers to Point(0)"), "{err}");
-        let err = user_energy_term("big", &[vec![Node::Point(0); 5]], vec![], &[], trace_element(5, 0, |a| Ok(a.x[4].norm_sq())).unwrap())
-            .err()
-            .unwrap()
-            .to_string();
+        let err = user_energy_term(
+            "big",
+            &[vec![Node::Point(0); 5]],
+            vec![],
+            &[],
+            trace_element(5, 0, |a| Ok(a.x[4].norm_sq())).unwrap(),
+        )
+        .err()
+        .unwrap()
+        .to_string();
         assert!(err.contains("5 nodes, supported are 1 to 4"), "{err}");
     }
 }
