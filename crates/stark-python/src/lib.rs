@@ -20,6 +20,7 @@ mod params;
 mod rigid;
 mod scene;
 mod simulation;
+mod sym;
 
 use pyo3::prelude::*;
 
@@ -40,5 +41,6 @@ fn _starkrs(m: &Bound<'_, PyModule>) -> PyResult<()> {
     scene::register(m)?;
     m.add_submodule(&geometry::module(py)?)?;
     m.add_submodule(&meshes::module(py)?)?;
+    m.add_submodule(&sym::module(py)?)?;
     Ok(())
 }

@@ -8,10 +8,10 @@ from pathlib import Path
 import pytest
 
 import starkrs
-from starkrs import _starkrs, geometry, meshes
+from starkrs import _starkrs, geometry, meshes, sym
 
 PACKAGE = Path(starkrs.__file__).parent
-ALIASES = {"geometry", "meshes", "__version__"}
+ALIASES = {"geometry", "meshes", "sym", "__version__"}
 
 
 def stub_names(path):
@@ -43,7 +43,7 @@ def public(obj):
 
 
 def test_stub_files_ship_with_the_package():
-    for name in ("__init__.pyi", "geometry.pyi", "meshes.pyi", "py.typed"):
+    for name in ("__init__.pyi", "geometry.pyi", "meshes.pyi", "sym.pyi", "py.typed"):
         assert (PACKAGE / name).exists(), name
 
 
@@ -61,7 +61,7 @@ def test_module_stub_matches_the_runtime():
         assert members - runtime_members - {"__new__", "__len__", "__copy__", "__deepcopy__"} == set(), name
 
 
-@pytest.mark.parametrize("module, stub", [(geometry, "geometry.pyi"), (meshes, "meshes.pyi")])
+@pytest.mark.parametrize("module, stub", [(geometry, "geometry.pyi"), (meshes, "meshes.pyi"), (sym, "sym.pyi")])
 def test_submodule_stubs_match_the_runtime(module, stub):
     top, _ = stub_names(PACKAGE / stub)
     assert public(module) == top - ALIASES
@@ -112,7 +112,7 @@ def test_everything_public_has_a_docstring():
                     continue
                 if not (getattr(value, "__doc__", None) or "").strip():
                     missing.append(f"{name}.{member}")
-    for module in (geometry, meshes):
+    for module in (geometry, meshes, sym):
         for name in public(module):
             if not (getattr(module, name).__doc__ or "").strip():
                 missing.append(f"{module.__name__}.{name}")

@@ -20,5 +20,5 @@ pub mod solver;
 pub mod state;
 
 pub use error::{Result, StarkError};
-pub use simulation::{RunSummary, Simulation, StateCheck, StepReport};
+pub use simulation::{RunSummary, Simulation, StateCheck, StepReport, UserEnergyHandle};
 pub use solver::Settings;

@@ -3,7 +3,8 @@
 use crate::contact::{Contact, ContactStats};
 use crate::deformables::{Deformables, NodeSetHandle};
 use crate::energy::kinematics::BodyPose;
-use crate::energy::{EnergyTerm, StepCheck};
+use crate::energy::user_energy::{self, UserEnergyTerm};
+use crate::energy::{EnergyTerm, Node, StepCheck};
 use crate::error::{Result, StarkError};
 use crate::io::output::Output;
 use crate::rigidbodies::{commit_bodies, RigidBodies};
@@ -22,6 +23,10 @@ struct TimeEvent {
     end_s: f64,
     action: EventAction,
 }
+
+/// Handle to a user energy of a simulation.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, serde::Deserialize)]
+pub struct UserEnergyHandle(pub u32);
 
 /// What one accepted time step did (one line of the step log).
 #[derive(Clone, Debug, Serialize)]
@@ -136,6 +141,7 @@ pub struct Simulation {
     /// Frames and logs.
     pub output: Output,
     custom: Vec<Box<dyn EnergyTerm>>,
+    user_energies: Vec<Box<dyn UserEnergyTerm>>,
     time: f64,
     dt: f64,
     events: Vec<TimeEvent>,
@@ -176,6 +182,7 @@ impl Simulation {
             contact: Contact::default(),
             output: Output::default(),
             custom: Vec::new(),
+            user_energies: Vec::new(),
             time: 0.0,
             dt,
             events: Vec::new(),
@@ -275,6 +282,69 @@ impl Simulation {
         self.custom.push(term);
     }
 
+    /// Add a user energy with run-time generated derivatives (README "Your own energy"):
+    /// `traced` comes from [`trace_element`](crate::energy::trace_element), every element lists
+    /// its nodes (deformable nodes, rigid-body mesh vertices or [`Node::Rigid`] points), and
+    /// `params` gives one value per name (shared) or one per name and element.
+    pub fn add_user_energy(
+        &mut self,
+        name: &str,
+        elements: &[Vec<Node>],
+        param_names: Vec<String>,
+        params: &[f64],
+        traced: crate::energy::symbolic::TracedEnergy,
+    ) -> Result<UserEnergyHandle> {
+        for (i, el) in elements.iter().enumerate() {
+            for node in el {
+                let ok = match *node {
+                    Node::Point(k) => (k as usize) < self.nodes.len(),
+                    Node::Rigid { body, local } => {
+                        (body as usize) < self.bodies.len() && local.iter().all(|c| c.is_finite())
+                    }
+                    Node::AngularVelocity(body) => (body as usize) < self.bodies.len(),
+                    Node::World(p) => p.iter().all(|c| c.is_finite()),
+                };
+                if !ok {
+                    return Err(StarkError::InvalidInput(format!(
+                        "energy '{name}': element {i} refers to {node:?}, but the simulation has {} nodes and {} bodies",
+                        self.nodes.len(),
+                        self.bodies.len()
+                    )));
+                }
+            }
+        }
+        let term = user_energy::user_energy_term(name, elements, param_names, params, traced)?;
+        self.user_energies.push(term);
+        Ok(UserEnergyHandle(self.user_energies.len() as u32 - 1))
+    }
+
+    /// A user energy added with [`Simulation::add_user_energy`].
+    pub fn user_energy(&self, h: UserEnergyHandle) -> Result<&dyn UserEnergyTerm> {
+        let len = self.user_energies.len();
+        self.user_energies
+            .get(h.0 as usize)
+            .map(|t| &**t)
+            .ok_or(StarkError::InvalidHandle {
+                kind: "user energy",
+                index: h.0 as usize,
+                len,
+            })
+    }
+
+    /// Change a parameter of a user energy (one value, or one per element); takes effect from
+    /// the next step.
+    pub fn set_user_energy_param(&mut self, h: UserEnergyHandle, name: &str, values: &[f64]) -> Result<()> {
+        let len = self.user_energies.len();
+        self.user_energies
+            .get_mut(h.0 as usize)
+            .ok_or(StarkError::InvalidHandle {
+                kind: "user energy",
+                index: h.0 as usize,
+                len,
+            })?
+            .set_param(name, values)
+    }
+
     /// Run `action(sim, t)` before every step whose end time `t` lies in `[start_s, end_s)`.
     /// Use it to move prescribed targets, ramp parameters or change gravity; `t` is the time the
     /// step is solved for, so targets set for `t` are met at the end of that step.
@@ -296,6 +366,7 @@ impl Simulation {
         terms.extend(self.rigid_bodies.terms_mut());
         terms.push(&mut self.contact);
         terms.extend(self.custom.iter_mut().map(|t| &mut **t as &mut dyn EnergyTerm));
+        terms.extend(self.user_energies.iter_mut().map(|t| &mut **t as &mut dyn EnergyTerm));
         terms
     }
 

@@ -14,6 +14,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from . import geometry as geometry
 from . import meshes as meshes
+from . import sym as sym
 
 __version__: str
 
@@ -799,6 +800,24 @@ class Simulation:
         """
     def add_time_event(self, t0: float, t1: float, action: Callable[[Simulation, float], Any]) -> None:
         """Run `action(sim, t)` before every step whose end time `t` lies in `[t0, t1)`."""
+    def add_energy(
+        self,
+        name: str,
+        element_nodes: Any,
+        elements: Optional[ArrayLike],
+        fn: Callable[[sym.Nodes, sym.Nodes, sym.Expr, sym.Params], Any],
+        params: Optional[dict[str, ArrayLike]] = None,
+    ) -> sym.EnergyHandle:
+        """Add your own energy written with `starkrs.sym`: `fn(x, v, dt, p)` is called once with
+        symbolic node positions and velocities (`x[a]`, `v[a]`), the step and the parameters and
+        returns the element's energy in J; it is differentiated and compiled to native code.
+        `element_nodes`: node indices, node sets (or objects) and `(body, local_point_m)` rigid
+        points; `elements`: index lists into them (1 to 4 nodes), or None for one per node;
+        `params`: name → number, 3-vector or per-element array."""
+    def set_energy_params(self, energy: sym.EnergyHandle, params: dict[str, ArrayLike]) -> None:
+        """Change parameters of an `add_energy` energy (from the next step)."""
+    def energy_params(self, energy: sym.EnergyHandle) -> dict[str, NDArray[np.float64]]:
+        """An `add_energy` energy's parameter values per element (`m[0]`, `m[1]`, `m[2]` for a vector)."""
     def write_frame(self) -> list[str]:
         """Write one frame of every output mesh now; returns the file paths."""
 

@@ -4,6 +4,7 @@
 pub mod assembly;
 pub mod deformation;
 pub mod dual;
+pub mod jit;
 pub mod kinematics;
 pub mod potential;
 pub mod psd;
@@ -12,9 +13,11 @@ pub mod symbolic;
 pub mod tensor;
 pub mod term;
 pub mod testing;
+pub mod user_energy;
 
 pub use dual::HyperDual;
 pub use potential::{run_kernel, FastDerivatives, Kernel, Node, Potential, PotentialTerm, Stencil};
 pub use scalar::Scalar;
 pub use tensor::{flat_from_points, points_from_flat, Mat, Mat2, Mat3, Mat32, Vec3};
 pub use term::{EnergyTerm, EvalMode, StepCheck};
+pub use user_energy::{trace_element, ElementArgs, UserEnergy, UserEnergyTerm};

@@ -402,7 +402,9 @@ impl<P: Potential<N>, const N: usize> EnergyTerm for PotentialTerm<P, N> {
         if !self.all_free(e, state) {
             // Rigid nodes: chain rule through the kinematic map, projected in DOF space (the
             // second-order rotation term belongs in the Hessian before projection, DESIGN §2).
-            d = dual_derivatives(&self.potential, e, &stencil);
+            // The exact element Hessian is needed before the map (generated or JIT kernels
+            // where the potential has them, hyper-duals otherwise).
+            element_derivatives(&self.potential, e, &stencil, false, &mut d);
             let maps: [NodeMap; N] = stencil.nodes.map(|node| node.map(state));
             let projection = if project {
                 MapProjection::Full

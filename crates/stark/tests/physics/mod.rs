@@ -10,6 +10,7 @@ pub mod grasp_slips_at_mu_f;
 pub mod incline_friction;
 pub mod joint_rig;
 pub mod joints_hold_their_load;
+pub mod magnet_lifts_the_cubes;
 pub mod mesh_files_give_mass_properties;
 pub mod motor_lifts_and_stalls;
 pub mod pendulum_period;
