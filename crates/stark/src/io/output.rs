@@ -68,6 +68,8 @@ pub struct Output {
     pub frames_written: usize,
     /// Time of the next frame, s.
     pub next_frame_time: f64,
+    /// Simulated time of each frame written, s.
+    pub frame_times: Vec<f64>,
     log: Option<std::io::BufWriter<std::fs::File>>,
     bodies_log: Option<std::io::BufWriter<std::fs::File>>,
     joints_log: Option<std::io::BufWriter<std::fs::File>>,
@@ -125,10 +127,14 @@ impl Output {
 
     /// Start the step log (truncates an existing one).
     pub fn open_log(&mut self, directory: &Path, name: &str) -> Result<PathBuf> {
-        std::fs::create_dir_all(directory).map_err(|e| io_err(directory, e))?;
-        let path = directory.join(format!("{name}.steps.jsonl"));
-        let file = std::fs::File::create(&path).map_err(|e| io_err(&path, e))?;
-        self.log = Some(std::io::BufWriter::new(file));
+        self.open_log_keeping(directory, name, None)
+    }
+
+    /// Start the step log; with `keep_lines`, an existing log keeps its first lines (a run
+    /// resumed from a checkpoint continues it) and the rest is dropped.
+    pub fn open_log_keeping(&mut self, directory: &Path, name: &str, keep_lines: Option<u64>) -> Result<PathBuf> {
+        let (log, path) = create_log(directory, format!("{name}.steps.jsonl"), keep_lines)?;
+        self.log = Some(log);
         Ok(path)
     }
 
@@ -156,11 +162,31 @@ impl Output {
     }
 }
 
-fn create_log(directory: &Path, file: String) -> Result<(std::io::BufWriter<std::fs::File>, PathBuf)> {
+/// Create a log file; with `keep_lines`, keep that many lines of an existing one (one line per
+/// step in every log) and append after them.
+fn create_log(
+    directory: &Path,
+    file: String,
+    keep_lines: Option<u64>,
+) -> Result<(std::io::BufWriter<std::fs::File>, PathBuf)> {
     std::fs::create_dir_all(directory).map_err(|e| io_err(directory, e))?;
     let path = directory.join(file);
+    let kept = match keep_lines {
+        Some(n) => match std::fs::read_to_string(&path) {
+            Ok(text) => text.lines().take(n as usize).fold(String::new(), |mut acc, l| {
+                acc.push_str(l);
+                acc.push('\n');
+                acc
+            }),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => String::new(),
+            Err(e) => return Err(io_err(&path, e)),
+        },
+        None => String::new(),
+    };
     let f = std::fs::File::create(&path).map_err(|e| io_err(&path, e))?;
-    Ok((std::io::BufWriter::new(f), path))
+    let mut w = std::io::BufWriter::new(f);
+    w.write_all(kept.as_bytes()).map_err(|e| io_err(&path, e))?;
+    Ok((w, path))
 }
 
 fn write_line<T: Serialize>(log: &mut Option<std::io::BufWriter<std::fs::File>>, what: &str, record: &T) -> Result<()> {
@@ -278,16 +304,16 @@ impl Simulation {
 
     /// Open the body and joint logs the settings ask for (the simulation has bodies or joints).
     /// Returns the files opened.
-    pub(crate) fn open_rigid_logs(&mut self) -> Result<Vec<PathBuf>> {
+    pub(crate) fn open_rigid_logs(&mut self, keep_lines: Option<u64>) -> Result<Vec<PathBuf>> {
         let o = &self.settings.output;
         let mut files = Vec::new();
         if o.step_log && o.bodies_log && !self.bodies.is_empty() {
-            let (log, path) = create_log(&o.directory, format!("{}.bodies.jsonl", self.settings.name))?;
+            let (log, path) = create_log(&o.directory, format!("{}.bodies.jsonl", self.settings.name), keep_lines)?;
             self.output.bodies_log = Some(log);
             files.push(path);
         }
         if o.step_log && o.joints_log && !self.rigid_bodies.named_joints.is_empty() {
-            let (log, path) = create_log(&o.directory, format!("{}.joints.jsonl", self.settings.name))?;
+            let (log, path) = create_log(&o.directory, format!("{}.joints.jsonl", self.settings.name), keep_lines)?;
             self.output.joints_log = Some(log);
             files.push(path);
         }

@@ -76,6 +76,13 @@ impl Potential<2> for RigidAttachmentSet {
     fn name(&self) -> &str {
         "rigid attachments"
     }
+    fn save_state(&self) -> Vec<u8> {
+        // Hardened stiffnesses live in the parameters.
+        crate::energy::encode_state(&self.groups.params)
+    }
+    fn restore_state(&mut self, bytes: &[u8]) -> Result<(), String> {
+        crate::energy::restore_vec(&mut self.groups.params, crate::energy::decode_state(bytes)?, "groups")
+    }
     fn num_elements(&self) -> usize {
         self.elements.len()
     }

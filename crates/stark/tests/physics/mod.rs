@@ -15,6 +15,7 @@ pub mod pendulum_period;
 pub mod quasistatic_stretch_converges;
 pub mod rb_point_chain_holds_its_joints;
 pub mod results_are_deterministic;
+pub mod resume_is_bit_identical;
 pub mod rigid_attachment_carries_the_cloth;
 pub mod rigid_bodies_do_not_tunnel;
 pub mod rigid_body_conserves_angular_momentum;
