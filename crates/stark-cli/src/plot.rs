@@ -16,6 +16,7 @@ const PANEL_HEIGHT_PX: u32 = 220;
 const MAX_PANELS: usize = 16;
 
 /// One series: its name (the key path) and its (time, value) points.
+#[derive(Debug)]
 struct Series {
     name: String,
     points: Vec<(f64, f64)>,
