@@ -351,8 +351,7 @@ impl Simulation {
             return Ok(());
         }
         if self.settings.output.frames && self.settings.output.fps > 0.0 && !self.output.meshes.is_empty() {
-            self.output.write_frame(&dir, &self.settings.name, &self.nodes)?;
-            self.output.frame_times.push(self.time);
+            self.write_frame_now()?;
             self.output.next_frame_time = 1.0 / self.settings.output.fps;
         }
         Ok(())
@@ -604,15 +603,74 @@ impl Simulation {
         self.write_rigid_logs(r.step)?;
         let fps = self.settings.output.fps;
         if self.settings.output.frames && fps > 0.0 && !self.output.meshes.is_empty() {
-            let dir = self.settings.output.directory.clone();
             while self.time >= self.output.next_frame_time - 1e-9 * self.dt {
-                self.output.write_frame(&dir, &self.settings.name, &self.nodes)?;
-                self.output.frame_times.push(self.time);
+                self.write_frame_now()?;
                 self.output.next_frame_time += 1.0 / fps;
             }
         }
         self.summary.frames = self.output.frames_written;
         Ok(())
+    }
+
+    /// Write one frame of the current state in the settings' format.
+    fn write_frame_now(&mut self) -> Result<()> {
+        let dir = self.settings.output.directory.clone();
+        let name = self.settings.name.clone();
+        match self.settings.output.frame_format {
+            crate::solver::FrameFormat::LegacyVtk => {
+                self.output.write_frame(&dir, &name, &self.nodes)?;
+                self.output.frame_times.push(self.time);
+            }
+            crate::solver::FrameFormat::Vtu => {
+                let fields = self.node_fields();
+                let x = &self.nodes.x;
+                let cells: Vec<_> = self
+                    .output
+                    .meshes
+                    .iter()
+                    .map(|m| match &m.cells {
+                        crate::io::output::OutputCells::Tets(_) => {
+                            self.deformables.tets.potential.cell_fields(&m.label, x)
+                        }
+                        crate::io::output::OutputCells::Triangles(_) => {
+                            self.deformables.triangles.potential.cell_fields(&m.label, x)
+                        }
+                        _ => None,
+                    })
+                    .collect();
+                self.output
+                    .write_frame_vtu(&dir, &name, &self.nodes, self.time, &fields, &cells)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// The per-node output fields of the current state: contact force, prescribed, attached.
+    pub fn node_fields(&mut self) -> crate::io::fields::NodeFields {
+        let n = self.nodes.len();
+        let contact_force_n = if self.contact.objects().is_empty() {
+            vec![Vector3::zeros(); n]
+        } else {
+            self.contact.barrier_forces(&self.nodes.x)
+        };
+        let mut prescribed = vec![false; n];
+        for &i in self.deformables.prescribed.potential.prescribed_nodes() {
+            prescribed[i as usize] = true;
+        }
+        let mut attached = vec![false; n];
+        let a = &self.deformables.attachments;
+        a.point_point
+            .potential
+            .attached_nodes()
+            .chain(a.point_edge.potential.attached_nodes())
+            .chain(a.point_triangle.potential.attached_nodes())
+            .chain(self.rigid_bodies.attachments.potential.attached_nodes())
+            .for_each(|i| attached[i as usize] = true);
+        crate::io::fields::NodeFields {
+            contact_force_n,
+            prescribed,
+            attached,
+        }
     }
 
     /// Simulate `duration_s` more seconds.

@@ -164,6 +164,13 @@ impl<const N: usize> AttachmentSet<N> {
     }
 }
 
+impl<const N: usize> AttachmentSet<N> {
+    /// Every node taking part in an attachment (global indices, with repeats).
+    pub fn attached_nodes(&self) -> impl Iterator<Item = u32> + '_ {
+        self.nodes.iter().flatten().copied()
+    }
+}
+
 impl<const N: usize> Potential<N> for AttachmentSet<N> {
     fn name(&self) -> &str {
         self.name

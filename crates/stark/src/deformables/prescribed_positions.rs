@@ -227,6 +227,13 @@ impl PrescribedPositions {
     }
 }
 
+impl PrescribedPositions {
+    /// Every prescribed node (global indices).
+    pub fn prescribed_nodes(&self) -> &[u32] {
+        &self.node
+    }
+}
+
 impl Potential<1> for PrescribedPositions {
     fn name(&self) -> &str {
         "prescribed positions"

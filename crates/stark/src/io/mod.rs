@@ -2,10 +2,12 @@
 //! declarative scene files (TOML or JSON).
 
 pub mod checkpoint;
+pub mod fields;
 pub mod mesh_files;
 pub mod output;
 pub mod scene;
 pub mod vtk;
+pub mod vtu;
 
 pub use checkpoint::{read_header as read_checkpoint_header, CheckpointHeader, SceneOrigin, CHECKPOINT_FORMAT_VERSION};
 pub use mesh_files::{

@@ -72,6 +72,16 @@ impl RigidAttachmentSet {
     }
 }
 
+impl RigidAttachmentSet {
+    /// Every deformable node attached to a body (global indices, with repeats).
+    pub fn attached_nodes(&self) -> impl Iterator<Item = u32> + '_ {
+        self.elements.iter().flatten().filter_map(|n| match n {
+            Node::Point(i) => Some(*i),
+            _ => None,
+        })
+    }
+}
+
 impl Potential<2> for RigidAttachmentSet {
     fn name(&self) -> &str {
         "rigid attachments"
