@@ -26,4 +26,5 @@ pub mod rigid_box_rests_on_soft_block;
 pub mod rigid_box_stack_rests;
 pub mod servo_reaches_and_holds;
 pub mod stark_replicas_match_reference;
+pub mod stress_fields_match_uniaxial_tension;
 pub mod velocity_controllers_cap_their_effort;
