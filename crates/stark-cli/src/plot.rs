@@ -204,7 +204,17 @@ fn draw(series: &[Series], title: &str, png: &Path) -> Result<()> {
     for (i, (s, panel)) in series.iter().zip(panels.iter()).enumerate() {
         let finite: Vec<(f64, f64)> = s.points.iter().copied().filter(|p| p.1.is_finite()).collect();
         let log_scale = s.name.contains("residual") && finite.iter().all(|p| p.1 > 0.0) && !finite.is_empty();
-        let colour = Palette99::pick(i).to_rgba();
+        // Dark, distinct colours that stay readable on white.
+        const COLOURS: [(u8, u8, u8); 6] = [
+            (31, 92, 180),
+            (200, 60, 40),
+            (40, 140, 60),
+            (130, 70, 170),
+            (200, 120, 0),
+            (20, 140, 150),
+        ];
+        let (r, g, b) = COLOURS[i % COLOURS.len()];
+        let colour = RGBColor(r, g, b).to_rgba();
         let (lo, hi) = finite.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
             (lo.min(p.1), hi.max(p.1))
         });

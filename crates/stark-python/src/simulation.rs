@@ -421,13 +421,10 @@ impl Simulation {
         }
     }
 
-    /// Write one frame of every output mesh now; returns the file paths.
+    /// Write one frame of every output mesh now (VTU, or legacy VTK if
+    /// `settings.output.frame_format` says so); returns the file paths.
     fn write_frame(&self) -> PyResult<Vec<String>> {
-        let files = self.with(|s| {
-            let dir = s.settings.output.directory.clone();
-            let name = s.settings.name.clone();
-            s.output.write_frame(&dir, &name, &s.nodes)
-        })?;
+        let files = self.with(|s| s.write_frame())?;
         Ok(files.iter().map(|p| p.display().to_string()).collect())
     }
 

@@ -612,14 +612,20 @@ impl Simulation {
         Ok(())
     }
 
-    /// Write one frame of the current state in the settings' format.
     fn write_frame_now(&mut self) -> Result<()> {
+        self.write_frame().map(|_| ())
+    }
+
+    /// Write one frame of the current state now, in the settings' format (with VTU, the
+    /// `.pvd` lists it at the current time); returns the files written.
+    pub fn write_frame(&mut self) -> Result<Vec<std::path::PathBuf>> {
         let dir = self.settings.output.directory.clone();
         let name = self.settings.name.clone();
         match self.settings.output.frame_format {
             crate::solver::FrameFormat::LegacyVtk => {
-                self.output.write_frame(&dir, &name, &self.nodes)?;
+                let files = self.output.write_frame(&dir, &name, &self.nodes)?;
                 self.output.frame_times.push(self.time);
+                Ok(files)
             }
             crate::solver::FrameFormat::Vtu => {
                 let fields = self.node_fields();
@@ -639,10 +645,9 @@ impl Simulation {
                     })
                     .collect();
                 self.output
-                    .write_frame_vtu(&dir, &name, &self.nodes, self.time, &fields, &cells)?;
+                    .write_frame_vtu(&dir, &name, &self.nodes, self.time, &fields, &cells)
             }
         }
-        Ok(())
     }
 
     /// The per-node output fields of the current state: contact force, prescribed, attached.

@@ -815,7 +815,7 @@ class Simulation:
     def add_time_event(self, t0: float, t1: float, action: Callable[[Simulation, float], Any]) -> None:
         """Run `action(sim, t)` before every step whose end time `t` lies in `[t0, t1)`."""
     def write_frame(self) -> list[str]:
-        """Write one frame of every output mesh now; returns the file paths."""
+        """Write one frame of every output mesh now (VTU, or legacy VTK per `settings.output.frame_format`); returns the file paths."""
 
     # Nodes
     def add_nodes(self, label: str, positions: _Points) -> NodeSet:
