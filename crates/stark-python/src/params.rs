@@ -239,8 +239,10 @@ mirror! {
         directory: PathBuf,
         /// Frames per simulated second; 0 disables frames (default: 30).
         fps: f64,
-        /// Write VTK frames (default: True).
+        /// Write frames (default: True).
         frames: bool,
+        /// Frame format: "vtu" (XML with fields, plus a .pvd with the times) or "legacy_vtk" (default: "vtu").
+        frame_format: Choice<stark::solver::settings::FrameFormat>,
         /// Write the per-step log `<name>.steps.jsonl`; False also turns off the body and joint logs (default: True).
         step_log: bool,
         /// Write `<name>.bodies.jsonl` (every rigid body's pose and velocities per step) when there are rigid bodies (default: True).

@@ -33,16 +33,17 @@ pub struct Scene {
 #[pymethods]
 impl Scene {
     /// Run the scene for `duration` seconds (default: its own duration); returns the run summary.
-    #[pyo3(signature = (duration=None, callback=None))]
+    #[pyo3(signature = (duration=None, callback=None, progress=false))]
     fn run<'py>(
         &self,
         py: Python<'py>,
         duration: Option<f64>,
         callback: Option<Py<PyAny>>,
+        progress: bool,
     ) -> PyResult<Bound<'py, PyAny>> {
         self.simulation
             .bind(py)
-            .call_method1("run", (duration.unwrap_or(self.duration_s), callback))
+            .call_method1("run", (duration.unwrap_or(self.duration_s), callback, progress))
     }
 
     fn __repr__(&self) -> String {
@@ -120,9 +121,10 @@ fn wrap(py: Python<'_>, scene: stark::io::LoadedScene) -> PyResult<Scene> {
 }
 
 /// Load a scene file (TOML, or JSON if the name ends in `.json`). The optional arguments
-/// override the file's output directory, thread count, frames and step log.
+/// override the file's output directory, thread count, frames and step log; `overrides` is a
+/// list of `key.path=value` strings applied to the file first (as `stark run --set`).
 #[pyfunction]
-#[pyo3(signature = (path, output_directory=None, threads=None, frames=None, step_log=None))]
+#[pyo3(signature = (path, output_directory=None, threads=None, frames=None, step_log=None, overrides=None))]
 fn load_scene(
     py: Python<'_>,
     path: PathBuf,
@@ -130,9 +132,15 @@ fn load_scene(
     threads: Option<usize>,
     frames: Option<bool>,
     step_log: Option<bool>,
+    overrides: Option<Vec<String>>,
 ) -> PyResult<Scene> {
+    let overrides = overrides.unwrap_or_default();
     let scene = py.detach(|| {
-        guarded(|| stark::io::load_scene_with(&path, |s| configure(s, output_directory, threads, frames, step_log)))
+        guarded(|| {
+            stark::io::load_scene_with_overrides(&path, &overrides, |s| {
+                configure(s, output_directory, threads, frames, step_log)
+            })
+        })
     })?;
     wrap(py, scene)
 }

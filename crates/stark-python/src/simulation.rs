@@ -311,10 +311,17 @@ impl Simulation {
     }
 
     /// Simulate `duration` more seconds, calling `callback(sim)` before every step if given.
-    /// The GIL is released while solving; Ctrl-C stops the run between steps. Returns the
-    /// run summary as a dict.
-    #[pyo3(signature = (duration, callback=None))]
-    fn run<'py>(slf: &Bound<'py, Self>, duration: f64, callback: Option<Py<PyAny>>) -> PyResult<Bound<'py, PyAny>> {
+    /// The GIL is released while solving; Ctrl-C stops the run between steps. With
+    /// `progress=True`, a progress bar (simulated time, steps, wall time) is drawn on
+    /// `sys.stderr`. The last step is shortened to land on the end time. Returns the run
+    /// summary as a dict.
+    #[pyo3(signature = (duration, callback=None, progress=false))]
+    fn run<'py>(
+        slf: &Bound<'py, Self>,
+        duration: f64,
+        callback: Option<Py<PyAny>>,
+        progress: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
         if !(duration.is_finite() && duration >= 0.0) {
             return Err(stark_err(format!(
                 "duration must be finite and non-negative, got {duration}"
@@ -326,17 +333,43 @@ impl Simulation {
             }
         }
         let summary = Self::drive(slf, move |sim| {
-            sim.run_with(duration, |s| {
+            let mut bar = ProgressLine::new(sim.time(), duration);
+            let result = sim.run_with(duration, |s| {
+                let (t, steps) = (s.time(), s.summary().steps);
                 Self::serve(s, |py, obj| {
                     py.check_signals()?;
+                    if progress {
+                        bar.draw(py, t, steps, false)?;
+                    }
                     if let Some(cb) = &callback {
                         cb.call1(py, (obj,))?;
                     }
                     Ok(())
                 })
-            })
+            });
+            if progress {
+                let (t, steps) = (sim.time(), sim.summary().steps);
+                // The final line is drawn whatever happened; a failure to draw is not the run's.
+                let _ = Python::attach(|py| bar.draw(py, t, steps, true));
+            }
+            result
         })?;
         report_out(slf.py(), &summary)
+    }
+
+    /// Write a checkpoint of the whole state the next step depends on to `path`; a simulation
+    /// rebuilt the same way (with its time events added again) continues from it bit for bit
+    /// after `restore_checkpoint(path)`.
+    fn save_checkpoint(&self, path: std::path::PathBuf) -> PyResult<()> {
+        self.with(|s| s.save_checkpoint(&path))
+    }
+
+    /// Restore a checkpoint into this simulation, freshly built from the same scene (scene
+    /// files rebuild their time events; closures added with `add_time_event` must be added
+    /// again first) and not stepped yet. Another scene, a truncated file or another format
+    /// version raise `StarkError` saying which.
+    fn restore_checkpoint(&self, path: std::path::PathBuf) -> PyResult<()> {
+        self.with(|s| s.restore_checkpoint(&path))
     }
 
     /// Run `action(sim, t)` before every step whose end time `t` lies in `[t0, t1)`: move
@@ -388,13 +421,10 @@ impl Simulation {
         }
     }
 
-    /// Write one frame of every output mesh now; returns the file paths.
+    /// Write one frame of every output mesh now (VTU, or legacy VTK if
+    /// `settings.output.frame_format` says so); returns the file paths.
     fn write_frame(&self) -> PyResult<Vec<String>> {
-        let files = self.with(|s| {
-            let dir = s.settings.output.directory.clone();
-            let name = s.settings.name.clone();
-            s.output.write_frame(&dir, &name, &s.nodes)
-        })?;
+        let files = self.with(|s| s.write_frame())?;
         Ok(files.iter().map(|p| p.display().to_string()).collect())
     }
 
@@ -1502,4 +1532,53 @@ pub(crate) fn attachment_params_arg(
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Simulation>()?;
     Ok(())
+}
+
+/// The progress bar of `run(..., progress=True)`, written to `sys.stderr` (so notebooks and
+/// pytest's capture see it), redrawn at most five times a second.
+struct ProgressLine {
+    start_s: f64,
+    duration_s: f64,
+    wall: std::time::Instant,
+    last_draw: Option<std::time::Instant>,
+}
+
+impl ProgressLine {
+    fn new(start_s: f64, duration_s: f64) -> Self {
+        ProgressLine {
+            start_s,
+            duration_s,
+            wall: std::time::Instant::now(),
+            last_draw: None,
+        }
+    }
+
+    fn draw(&mut self, py: Python<'_>, time_s: f64, steps: u64, last: bool) -> PyResult<()> {
+        if !last && self.last_draw.is_some_and(|d| d.elapsed().as_secs_f64() < 0.2) {
+            return Ok(());
+        }
+        self.last_draw = Some(std::time::Instant::now());
+        const WIDTH: usize = 30;
+        let done = if self.duration_s > 0.0 {
+            ((time_s - self.start_s) / self.duration_s).clamp(0.0, 1.0)
+        } else {
+            1.0
+        };
+        let filled = (done * WIDTH as f64).round() as usize;
+        let line = format!(
+            "\r[{}{}] {:3.0}%  {:.3}/{:.3} s simulated  step {}  {:.1} s{}",
+            "#".repeat(filled),
+            "-".repeat(WIDTH - filled),
+            100.0 * done,
+            time_s - self.start_s,
+            self.duration_s,
+            steps,
+            self.wall.elapsed().as_secs_f64(),
+            if last { "\n" } else { "" }
+        );
+        let stderr = py.import("sys")?.getattr("stderr")?;
+        stderr.call_method1("write", (line,))?;
+        stderr.call_method0("flush")?;
+        Ok(())
+    }
 }

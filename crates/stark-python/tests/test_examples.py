@@ -31,7 +31,7 @@ def test_example_runs(path, tmp_path, capsys):
     sim = module.main(["--duration", "0.1", "--out", str(tmp_path)])
     assert sim.time == pytest.approx(0.1)
     assert "steps" in capsys.readouterr().out
-    assert any(f.endswith(".vtk") for f in os.listdir(tmp_path))
+    assert any(f.endswith(".vtu") for f in os.listdir(tmp_path))
     assert sim.find_intersections() == []
 
 

@@ -154,10 +154,11 @@ def test_outputs(tmp_path):
     sim.run(2 / 30)
     files = sorted(os.listdir(tmp_path))
     assert "out.steps.jsonl" in files
-    assert [f for f in files if f.endswith(".vtk")] == [f"out_cloth_0000{i}.vtk" for i in range(3)]
+    assert [f for f in files if f.endswith(".vtu")] == [f"out_cloth_0000{i}.vtu" for i in range(3)]
+    assert "out.pvd" in files
     assert sim.summary()["frames"] == 3
     written = sim.write_frame()
-    assert written and written[0].endswith("out_cloth_00003.vtk")
+    assert written and written[0].endswith("out_cloth_00003.vtu")
     s2 = starkrs.Settings(name="quiet")
     s2.output.directory = str(tmp_path / "quiet")
     s2.output.frames = False

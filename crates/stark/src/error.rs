@@ -84,6 +84,12 @@ pub enum StarkError {
         /// Why the last attempt failed.
         reason: String,
     },
+    /// A run was interrupted (Ctrl-C) between steps; every accepted step is kept.
+    #[error("interrupted at t = {time_s:.6} s")]
+    Interrupted {
+        /// Simulated time when the run stopped, s.
+        time_s: f64,
+    },
     /// A checkpoint could not be written or read.
     #[error("checkpoint '{path}': {message}")]
     Checkpoint {

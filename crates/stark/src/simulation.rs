@@ -69,7 +69,7 @@ pub struct StepReport {
 }
 
 /// Totals of a run.
-#[derive(Clone, Debug, Default, Serialize)]
+#[derive(Clone, Debug, Default, Serialize, serde::Deserialize)]
 pub struct RunSummary {
     /// Simulation name.
     pub scene: String,
@@ -152,6 +152,12 @@ pub struct Simulation {
     pool: Option<rayon::ThreadPool>,
     summary: RunSummary,
     started: bool,
+    /// While `run` runs: its end time, so that the last step is shortened to land on it.
+    step_end_limit: Option<f64>,
+    /// Restored from a checkpoint taken after this many steps: the logs keep their first lines
+    /// and the initial frame is not written again.
+    resumed_at_step: Option<u64>,
+    origin: crate::io::SceneOrigin,
 }
 
 impl Simulation {
@@ -192,6 +198,9 @@ impl Simulation {
             scratch_poses: Vec::new(),
             pool,
             started: false,
+            step_end_limit: None,
+            resumed_at_step: None,
+            origin: crate::io::SceneOrigin::Program,
         })
     }
 
@@ -403,12 +412,17 @@ impl Simulation {
         }
         self.started = true;
         let dir = self.settings.output.directory.clone();
+        // A resumed run continues the logs of the run it came from, cut back to the checkpoint.
+        let keep_lines = self.resumed_at_step;
         if self.settings.output.step_log {
-            self.output.open_log(&dir, &self.settings.name)?;
+            self.output.open_log_keeping(&dir, &self.settings.name, keep_lines)?;
         }
-        self.open_rigid_logs()?;
+        self.open_rigid_logs(keep_lines)?;
+        if keep_lines.is_some() {
+            return Ok(());
+        }
         if self.settings.output.frames && self.settings.output.fps > 0.0 && !self.output.meshes.is_empty() {
-            self.output.write_frame(&dir, &self.settings.name, &self.nodes)?;
+            self.write_frame_now()?;
             self.output.next_frame_time = 1.0 / self.settings.output.fps;
         }
         Ok(())
@@ -425,8 +439,13 @@ impl Simulation {
         let mut failure_reasons = Vec::new();
         let mut total_newton = 0;
         loop {
-            let dt = self.dt;
-            let t_end = self.time + dt;
+            // The last step of a run is shortened to land on its end time (a step within rounding
+            // of the remaining time is taken whole, so that runs split at a step boundary repeat
+            // the steps of one run bit for bit).
+            let (dt, t_end, shortened) = match self.step_end_limit {
+                Some(end) if end - self.time < self.dt * (1.0 - 1e-6) => (end - self.time, end, true),
+                _ => (self.dt, self.time + self.dt, false),
+            };
             self.run_events(t_end)?;
             self.contact.settings = self.settings.contact.clone();
             let mut masses = self.deformables.inertia.node_masses(self.nodes.len());
@@ -577,7 +596,8 @@ impl Simulation {
                         self.bodies = bodies;
                     }
                     self.velocities = velocities;
-                    if self.settings.adaptive_time_step {
+                    // A shortened last step leaves dt as it was (the run may continue).
+                    if self.settings.adaptive_time_step && !shortened {
                         self.dt = (dt * self.settings.time_step_growth).min(self.settings.time_step_s);
                     }
                     let step_report = StepReport {
@@ -654,14 +674,79 @@ impl Simulation {
         self.write_rigid_logs(r.step)?;
         let fps = self.settings.output.fps;
         if self.settings.output.frames && fps > 0.0 && !self.output.meshes.is_empty() {
-            let dir = self.settings.output.directory.clone();
             while self.time >= self.output.next_frame_time - 1e-9 * self.dt {
-                self.output.write_frame(&dir, &self.settings.name, &self.nodes)?;
+                self.write_frame_now()?;
                 self.output.next_frame_time += 1.0 / fps;
             }
         }
         self.summary.frames = self.output.frames_written;
         Ok(())
+    }
+
+    fn write_frame_now(&mut self) -> Result<()> {
+        self.write_frame().map(|_| ())
+    }
+
+    /// Write one frame of the current state now, in the settings' format (with VTU, the
+    /// `.pvd` lists it at the current time); returns the files written.
+    pub fn write_frame(&mut self) -> Result<Vec<std::path::PathBuf>> {
+        let dir = self.settings.output.directory.clone();
+        let name = self.settings.name.clone();
+        match self.settings.output.frame_format {
+            crate::solver::FrameFormat::LegacyVtk => {
+                let files = self.output.write_frame(&dir, &name, &self.nodes)?;
+                self.output.frame_times.push(self.time);
+                Ok(files)
+            }
+            crate::solver::FrameFormat::Vtu => {
+                let fields = self.node_fields();
+                let x = &self.nodes.x;
+                let cells: Vec<_> = self
+                    .output
+                    .meshes
+                    .iter()
+                    .map(|m| match &m.cells {
+                        crate::io::output::OutputCells::Tets(_) => {
+                            self.deformables.tets.potential.cell_fields(&m.label, x)
+                        }
+                        crate::io::output::OutputCells::Triangles(_) => {
+                            self.deformables.triangles.potential.cell_fields(&m.label, x)
+                        }
+                        _ => None,
+                    })
+                    .collect();
+                self.output
+                    .write_frame_vtu(&dir, &name, &self.nodes, self.time, &fields, &cells)
+            }
+        }
+    }
+
+    /// The per-node output fields of the current state: contact force, prescribed, attached.
+    pub fn node_fields(&mut self) -> crate::io::fields::NodeFields {
+        let n = self.nodes.len();
+        let contact_force_n = if self.contact.objects().is_empty() {
+            vec![Vector3::zeros(); n]
+        } else {
+            self.contact.barrier_forces(&self.nodes.x)
+        };
+        let mut prescribed = vec![false; n];
+        for &i in self.deformables.prescribed.potential.prescribed_nodes() {
+            prescribed[i as usize] = true;
+        }
+        let mut attached = vec![false; n];
+        let a = &self.deformables.attachments;
+        a.point_point
+            .potential
+            .attached_nodes()
+            .chain(a.point_edge.potential.attached_nodes())
+            .chain(a.point_triangle.potential.attached_nodes())
+            .chain(self.rigid_bodies.attachments.potential.attached_nodes())
+            .for_each(|i| attached[i as usize] = true);
+        crate::io::fields::NodeFields {
+            contact_force_n,
+            prescribed,
+            attached,
+        }
     }
 
     /// Simulate `duration_s` more seconds.
@@ -676,12 +761,159 @@ impl Simulation {
         mut callback: impl FnMut(&mut Simulation) -> Result<()>,
     ) -> Result<RunSummary> {
         let end = self.time + duration_s;
+        self.step_end_limit = Some(end);
+        let mut result = Ok(());
         // Stop when less than a thousandth of a step remains (rounding of repeated additions).
         while self.time < end - 1e-3 * self.dt.min(self.settings.time_step_s) {
-            callback(self)?;
-            self.step()?;
+            result = callback(self).and_then(|()| self.step().map(|_| ()));
+            if result.is_err() {
+                break;
+            }
         }
-        self.output.flush()?;
+        self.step_end_limit = None;
+        // The logs are flushed also when a step or the callback failed (or was interrupted),
+        // so that they hold every accepted step.
+        let flushed = self.output.flush();
+        result?;
+        flushed?;
         Ok(self.summary.clone())
+    }
+
+    /// Where the scene came from (set by the scene loaders; [`SceneOrigin::Program`](crate::io::SceneOrigin::Program)
+    /// for simulations built in code), recorded in checkpoints.
+    pub fn scene_origin(&self) -> &crate::io::SceneOrigin {
+        &self.origin
+    }
+
+    /// Record where the scene came from (the CLI does, for `stark resume`).
+    pub fn set_scene_origin(&mut self, origin: crate::io::SceneOrigin) {
+        self.origin = origin;
+    }
+
+    /// A hash of the scene's structure: nodes and their rest positions, bodies and their mass
+    /// properties, every term's name and element count (contact's active pairs excluded), the
+    /// contact objects and the number of time events. A checkpoint restores only into a
+    /// simulation of the same hash.
+    pub fn scene_hash(&mut self) -> u64 {
+        let mut h = crate::io::checkpoint::Fnv::default();
+        h.str("stark scene");
+        h.u64(self.nodes.len() as u64);
+        for (r, b) in self.nodes.rest.iter().zip(&self.nodes.body) {
+            r.iter().for_each(|&c| h.f64(c));
+            h.u64(u64::from(*b));
+        }
+        for (label, set) in &self.deformables.sets {
+            h.str(label);
+            h.u64(u64::from(set.len));
+        }
+        h.u64(self.bodies.len() as u64);
+        for b in 0..self.bodies.len() {
+            h.f64(self.bodies.mass[b]);
+            self.bodies.inertia_local[b].iter().for_each(|&c| h.f64(c));
+        }
+        for label in &self.rigid_bodies.labels {
+            h.str(label);
+        }
+        for o in self.contact.objects() {
+            h.str(&o.label);
+        }
+        h.u64(self.events.len() as u64);
+        for t in self.terms_mut() {
+            h.str(t.name());
+            // Contact's elements are its active pairs, which change from step to step; the rigid
+            // inertia adds its pinned rigid nodes at the first step (both are hashed above).
+            if t.name() != "contact" && t.name() != "rigid body inertia" {
+                h.u64(t.num_elements() as u64);
+            }
+        }
+        h.finish()
+    }
+
+    /// Write a checkpoint of the current state to `path` (see [`crate::io::checkpoint`]); a run
+    /// continued from it with [`Simulation::restore_checkpoint`] repeats this one bit for bit.
+    pub fn save_checkpoint(&mut self, path: impl AsRef<std::path::Path>) -> Result<()> {
+        let path = path.as_ref();
+        // The logs then hold every step the checkpoint counts, whatever happens to the process.
+        self.output.flush()?;
+        let terms = self
+            .terms_mut()
+            .into_iter()
+            .map(|t| (t.name().to_string(), t.save_state()))
+            .collect();
+        let state = crate::io::checkpoint::SimulationState {
+            nodes: self.nodes.clone(),
+            bodies: self.bodies.clone(),
+            settings: self.settings.clone(),
+            time_s: self.time,
+            dt_s: self.dt,
+            summary: self.summary.clone(),
+            frames_written: self.output.frames_written,
+            next_frame_time_s: self.output.next_frame_time,
+            frame_times_s: self.output.frame_times.clone(),
+            terms,
+        };
+        let header = crate::io::checkpoint::header(
+            self.scene_hash(),
+            &self.settings.name,
+            self.origin.clone(),
+            &self.settings.output.directory,
+            self.time,
+            self.summary.steps,
+        );
+        crate::io::checkpoint::write(path, header, &state)
+    }
+
+    /// Restore a checkpoint written by [`Simulation::save_checkpoint`] into this simulation,
+    /// which must be freshly built from the same scene (with its time events registered again)
+    /// and not yet stepped. The settings come back as saved except `threads` and `output`, which
+    /// stay this simulation's (so the caller chooses where the continued run writes); the logs
+    /// there are cut back to the checkpoint's step and continued, and frames continue numbering.
+    pub fn restore_checkpoint(&mut self, path: impl AsRef<std::path::Path>) -> Result<()> {
+        let path = path.as_ref();
+        let fail = |message: String| StarkError::Checkpoint {
+            path: path.display().to_string(),
+            message,
+        };
+        if self.started {
+            return Err(fail(
+                "a checkpoint restores only into a freshly built simulation that has not stepped yet".into(),
+            ));
+        }
+        let hash = self.scene_hash();
+        let (_, state) = crate::io::checkpoint::read(path, hash, &self.settings.name)?;
+        let mut terms = self.terms_mut();
+        if terms.len() != state.terms.len() {
+            return Err(fail(format!(
+                "{} energy terms saved, {} in this simulation",
+                state.terms.len(),
+                terms.len()
+            )));
+        }
+        for (t, (name, bytes)) in terms.iter_mut().zip(&state.terms) {
+            if t.name() != name {
+                return Err(fail(format!(
+                    "term '{name}' saved where this simulation has '{}'",
+                    t.name()
+                )));
+            }
+            t.restore_state(bytes)
+                .map_err(|e| fail(format!("term '{name}': {e}")))?;
+        }
+        drop(terms);
+        let keep_threads = self.settings.threads;
+        let keep_output = self.settings.output.clone();
+        self.settings = state.settings;
+        self.settings.threads = keep_threads;
+        self.settings.output = keep_output;
+        self.nodes = state.nodes;
+        self.bodies = state.bodies;
+        self.time = state.time_s;
+        self.dt = state.dt_s;
+        self.summary = state.summary;
+        self.output.frames_written = state.frames_written;
+        self.output.next_frame_time = state.next_frame_time_s;
+        self.output.frame_times = state.frame_times_s;
+        self.resumed_at_step = Some(self.summary.steps);
+        Ok(())
     }
 }

@@ -119,14 +119,16 @@ class OutputSettings:
     fps: float
     """Frames per simulated second; 0 disables frames (default: 30)."""
     frames: bool
-    """Write VTK frames (default: True)."""
+    """Write frames (default: True)."""
+    frame_format: Literal["vtu", "legacy_vtk"]
+    """Frame format: "vtu" (XML with fields, plus a .pvd with the times) or "legacy_vtk" (default: "vtu")."""
     step_log: bool
     """Write the per-step log `<name>.steps.jsonl`; False also turns off the body and joint logs (default: True)."""
     bodies_log: bool
     """Write `<name>.bodies.jsonl` (every rigid body's pose and velocities per step) when there are rigid bodies (default: True)."""
     joints_log: bool
     """Write `<name>.joints.jsonl` (every joint's state per step) when there are joints (default: True)."""
-    def __new__(cls, *, directory: Union[str, os.PathLike[str]] = ..., fps: float = ..., frames: bool = ..., step_log: bool = ..., bodies_log: bool = ..., joints_log: bool = ...) -> OutputSettings:
+    def __new__(cls, *, directory: Union[str, os.PathLike[str]] = ..., fps: float = ..., frames: bool = ..., frame_format: Literal["vtu", "legacy_vtk"] = ..., step_log: bool = ..., bodies_log: bool = ..., joints_log: bool = ...) -> OutputSettings:
         """Defaults of the library, with the given fields replaced."""
     def to_dict(self) -> dict[str, Any]:
         """The fields as a plain dict (nested settings as nested dicts)."""
@@ -792,11 +794,24 @@ class Simulation:
         """Advance by one accepted time step; returns the step report as a dict."""
     def run_one_step(self) -> _Report:
         """The same as `step()` (the original's name)."""
-    def run(self, duration: float, callback: Optional[Callable[[Simulation], Any]] = None) -> _Report:
+    def run(
+        self, duration: float, callback: Optional[Callable[[Simulation], Any]] = None, progress: bool = False
+    ) -> _Report:
         """Simulate `duration` more seconds, calling `callback(sim)` before every step if given.
 
         The GIL is released while solving; Ctrl-C stops the run between steps (KeyboardInterrupt);
-        an exception raised by a callback stops the run and is re-raised. Returns the run summary.
+        an exception raised by a callback stops the run and is re-raised. With `progress=True` a
+        progress bar is drawn on `sys.stderr`. The last step is shortened to land on the end
+        time. Returns the run summary.
+        """
+    def save_checkpoint(self, path: Union[str, os.PathLike[str]]) -> None:
+        """Write a checkpoint of the whole state the next step depends on (postcard, versioned)."""
+    def restore_checkpoint(self, path: Union[str, os.PathLike[str]]) -> None:
+        """Restore a checkpoint into this freshly built, not yet stepped simulation of the same scene.
+
+        Scene files rebuild their time events; closures added with `add_time_event` must be added
+        again before restoring. Another scene, a truncated file or another format version raise
+        `StarkError`.
         """
     def add_time_event(self, t0: float, t1: float, action: Callable[[Simulation, float], Any]) -> None:
         """Run `action(sim, t)` before every step whose end time `t` lies in `[t0, t1)`."""
@@ -819,7 +834,7 @@ class Simulation:
     def energy_params(self, energy: sym.EnergyHandle) -> dict[str, NDArray[np.float64]]:
         """An `add_energy` energy's parameter values per element (`m[0]`, `m[1]`, `m[2]` for a vector)."""
     def write_frame(self) -> list[str]:
-        """Write one frame of every output mesh now; returns the file paths."""
+        """Write one frame of every output mesh now (VTU, or legacy VTK per `settings.output.frame_format`); returns the file paths."""
 
     # Nodes
     def add_nodes(self, label: str, positions: _Points) -> NodeSet:
@@ -1275,7 +1290,12 @@ class Scene:
     @property
     def joints(self) -> dict[str, Joint]:
         """The joints by label: the `[[joint]]` entries and the fix joints of fixed bodies (`<body>.fixed`)."""
-    def run(self, duration: Optional[float] = None, callback: Optional[Callable[[Simulation], Any]] = None) -> _Report:
+    def run(
+        self,
+        duration: Optional[float] = None,
+        callback: Optional[Callable[[Simulation], Any]] = None,
+        progress: bool = False,
+    ) -> _Report:
         """Run the scene for `duration` seconds (default: its own duration); returns the run summary."""
 
 def load_scene(
@@ -1284,8 +1304,12 @@ def load_scene(
     threads: Optional[int] = None,
     frames: Optional[bool] = None,
     step_log: Optional[bool] = None,
+    overrides: Optional[list[str]] = None,
 ) -> Scene:
-    """Load a scene file (TOML, or JSON if the name ends in `.json`); the options override the file's."""
+    """Load a scene file (TOML, or JSON if the name ends in `.json`); the options override the file's.
+
+    `overrides` are `key.path=value` strings applied to the file first (as `stark run --set`).
+    """
 
 def parse_scene(
     text: str,

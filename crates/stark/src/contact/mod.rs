@@ -7,6 +7,7 @@
 //! bodies through the kinematic map.
 
 pub mod barrier;
+mod checkpoint;
 pub mod friction;
 pub mod pairs;
 pub use barrier::BarrierKind;
@@ -137,7 +138,7 @@ pub struct ContactObject {
 }
 
 /// Contact statistics of the last evaluation and step.
-#[derive(Clone, Copy, Debug, Default, Serialize)]
+#[derive(Clone, Copy, Debug, Default, Serialize, Deserialize)]
 pub struct ContactStats {
     /// Active barrier pairs.
     pub active_pairs: usize,
@@ -1180,6 +1181,12 @@ impl EnergyTerm for Contact {
             ));
         }
         StepCheck::Accept
+    }
+    fn save_state(&self) -> Vec<u8> {
+        self.save_checkpoint_state()
+    }
+    fn restore_state(&mut self, bytes: &[u8]) -> Result<(), String> {
+        self.restore_checkpoint_state(bytes)
     }
     fn after_step(&mut self, state: &EvalState) {
         let pairs = self.detect(state.x);

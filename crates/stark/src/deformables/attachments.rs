@@ -164,9 +164,23 @@ impl<const N: usize> AttachmentSet<N> {
     }
 }
 
+impl<const N: usize> AttachmentSet<N> {
+    /// Every node taking part in an attachment (global indices, with repeats).
+    pub fn attached_nodes(&self) -> impl Iterator<Item = u32> + '_ {
+        self.nodes.iter().flatten().copied()
+    }
+}
+
 impl<const N: usize> Potential<N> for AttachmentSet<N> {
     fn name(&self) -> &str {
         self.name
+    }
+    fn save_state(&self) -> Vec<u8> {
+        // Parameters may change between steps (`set_params`, time events, hardening).
+        crate::energy::encode_state(&self.groups.params)
+    }
+    fn restore_state(&mut self, bytes: &[u8]) -> Result<(), String> {
+        crate::energy::restore_vec(&mut self.groups.params, crate::energy::decode_state(bytes)?, "groups")
     }
     fn num_elements(&self) -> usize {
         self.nodes.len()

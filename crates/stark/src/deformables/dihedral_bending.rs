@@ -169,6 +169,13 @@ impl Potential<4> for DihedralBending {
     fn name(&self) -> &str {
         "dihedral bending"
     }
+    fn save_state(&self) -> Vec<u8> {
+        // Parameters may change between steps (`set_params`, time events, hardening).
+        crate::energy::encode_state(&self.groups.params)
+    }
+    fn restore_state(&mut self, bytes: &[u8]) -> Result<(), String> {
+        crate::energy::restore_vec(&mut self.groups.params, crate::energy::decode_state(bytes)?, "groups")
+    }
     fn num_elements(&self) -> usize {
         self.hinges.len()
     }

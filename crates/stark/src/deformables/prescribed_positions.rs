@@ -227,9 +227,29 @@ impl PrescribedPositions {
     }
 }
 
+impl PrescribedPositions {
+    /// Every prescribed node (global indices).
+    pub fn prescribed_nodes(&self) -> &[u32] {
+        &self.node
+    }
+}
+
 impl Potential<1> for PrescribedPositions {
     fn name(&self) -> &str {
         "prescribed positions"
+    }
+    fn save_state(&self) -> Vec<u8> {
+        // Hardened stiffnesses live in the parameters; targets move with time events.
+        crate::energy::encode_state(&(&self.groups.params, &self.reference, &self.target, self.hardenings))
+    }
+    fn restore_state(&mut self, bytes: &[u8]) -> Result<(), String> {
+        type Saved = (Vec<PrescribedParams>, Vec<Vector3<f64>>, Vec<Vector3<f64>>, usize);
+        let (params, reference, target, hardenings): Saved = crate::energy::decode_state(bytes)?;
+        crate::energy::restore_vec(&mut self.groups.params, params, "groups")?;
+        crate::energy::restore_vec(&mut self.reference, reference, "reference positions")?;
+        crate::energy::restore_vec(&mut self.target, target, "targets")?;
+        self.hardenings = hardenings;
+        Ok(())
     }
     fn num_elements(&self) -> usize {
         self.node.len()

@@ -324,9 +324,57 @@ impl TetStrain {
     }
 }
 
+impl TetStrain {
+    /// Strain and stress of every tet of the group labelled `label` (in the order they were
+    /// added) at positions `x`, for output; `None` without such a group. The stress is the
+    /// elastic one (strain limiting included, damping left out): Cauchy `σ = P Fᵀ / J` with
+    /// `P = ∂ψ/∂F` of the Stable Neo-Hookean density, by hyper-duals on `F`.
+    pub fn cell_fields(&self, label: &str, x: &[Vector3<f64>]) -> Option<Vec<crate::io::fields::CellFields>> {
+        let g = self.groups.labels.iter().position(|l| l == label)? as u32;
+        let params = &self.groups.params[g as usize];
+        let (mu, lambda) = params.lame();
+        let mu_ = 4.0 / 3.0 * mu;
+        let lambda_ = lambda + 5.0 / 6.0 * mu;
+        let mut p = [0.0; PSI_PARAMS];
+        p[0] = 1.0; // ψ per unit volume: its derivative is the first Piola–Kirchhoff stress
+        p[1] = mu_;
+        p[2] = lambda_;
+        p[3] = 1.0 + 0.75 * mu_ / lambda_;
+        p[11] = params.strain_limit;
+        p[12] = params.strain_limit_stiffness;
+        let out = (0..self.tets.len())
+            .filter(|&e| self.group[e] == g)
+            .map(|e| {
+                let t = self.tets[e];
+                let q = t.map(|i| x[i as usize]);
+                let ds = Matrix3::from_columns(&[q[1] - q[0], q[2] - q[0], q[3] - q[0]]);
+                let dm_inv = Matrix3::from_fn(|i, j| self.rest[e].dm_inv[i][j] / params.scale);
+                let f = ds * dm_inv;
+                let rows: [Vector3<f64>; 3] = std::array::from_fn(|r| f.row(r).transpose());
+                let v = HyperDual::<3>::variables(&rows);
+                let fd = Mat([v[0].0, v[1].0, v[2].0]);
+                let d = tet_psi(&fd, &p.map(HyperDual::constant), false, Limiting::Branch);
+                let pk1 = Matrix3::from_fn(|r, c| d.grad[r][c]);
+                let green = 0.5 * (f.transpose() * f - Matrix3::identity());
+                let ge = Mat(std::array::from_fn(|r| std::array::from_fn(|c| green[(r, c)])));
+                let active = largest_strain_bound(&ge) > params.strain_limit;
+                crate::io::fields::CellFields::new(green, pk1 * f.transpose() / f.determinant(), active)
+            })
+            .collect();
+        Some(out)
+    }
+}
+
 impl Potential<4> for TetStrain {
     fn name(&self) -> &str {
         "tet strain"
+    }
+    fn save_state(&self) -> Vec<u8> {
+        // Parameters may change between steps (`set_params`, time events, hardening).
+        crate::energy::encode_state(&self.groups.params)
+    }
+    fn restore_state(&mut self, bytes: &[u8]) -> Result<(), String> {
+        crate::energy::restore_vec(&mut self.groups.params, crate::energy::decode_state(bytes)?, "groups")
     }
     fn num_elements(&self) -> usize {
         self.tets.len()

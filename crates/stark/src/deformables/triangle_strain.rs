@@ -360,9 +360,60 @@ impl TriangleStrain {
     }
 }
 
+impl TriangleStrain {
+    /// Strain and stress of every triangle of the group labelled `label` (in the order they
+    /// were added) at positions `x`, for output; `None` without such a group. The Green strain
+    /// is the 2×2 one of the rest plane (in the upper-left block); the stress is the membrane's
+    /// Cauchy stress `σ = P Fᵀ / J` (plane stress, `J` the area ratio, damping left out,
+    /// strain limiting included) with `P = ∂ψ/∂F` by hyper-duals on the 3×2 `F`.
+    pub fn cell_fields(&self, label: &str, x: &[Vector3<f64>]) -> Option<Vec<crate::io::fields::CellFields>> {
+        let g = self.groups.labels.iter().position(|l| l == label)? as u32;
+        let params = &self.groups.params[g as usize];
+        let (mu, lambda) = params.lame();
+        let mut p = [0.0; PSI_PARAMS];
+        p[0] = 1.0; // ψ per unit volume
+        p[1] = mu;
+        p[2] = lambda;
+        p[7] = params.strain_limit;
+        p[8] = params.strain_limit_stiffness;
+        let out = (0..self.triangles.len())
+            .filter(|&e| self.group[e] == g)
+            .map(|e| {
+                let t = self.triangles[e];
+                let q = t.map(|i| x[i as usize]);
+                let ds = nalgebra::Matrix3x2::from_columns(&[q[1] - q[0], q[2] - q[0]]);
+                let r = &self.rest[e].dm_inv;
+                let dm_inv = Matrix2::new(r[0][0], r[0][1], r[1][0], r[1][1]) / params.scale;
+                let f = ds * dm_inv;
+                // Variables: column c of F is "node" c.
+                let cols: [Vector3<f64>; 2] = [f.column(0).into(), f.column(1).into()];
+                let v = HyperDual::<2>::variables(&cols);
+                let fd = Mat(std::array::from_fn(|row| [v[0].0[row], v[1].0[row]]));
+                let d = triangle_psi(&fd, &p.map(HyperDual::constant), false, Limiting::Branch);
+                let pk1 = nalgebra::Matrix3x2::from_fn(|row, c| d.grad[c][row]);
+                let c2 = f.transpose() * f;
+                let green2 = 0.5 * (c2 - Matrix2::identity());
+                let area_ratio = c2.determinant().max(0.0).sqrt();
+                let mut green = nalgebra::Matrix3::zeros();
+                green.fixed_view_mut::<2, 2>(0, 0).copy_from(&green2);
+                let active = green2.symmetric_eigen().eigenvalues.max() > params.strain_limit;
+                crate::io::fields::CellFields::new(green, pk1 * f.transpose() / area_ratio, active)
+            })
+            .collect();
+        Some(out)
+    }
+}
+
 impl Potential<3> for TriangleStrain {
     fn name(&self) -> &str {
         "triangle strain"
+    }
+    fn save_state(&self) -> Vec<u8> {
+        // Parameters may change between steps (`set_params`, time events, hardening).
+        crate::energy::encode_state(&self.groups.params)
+    }
+    fn restore_state(&mut self, bytes: &[u8]) -> Result<(), String> {
+        crate::energy::restore_vec(&mut self.groups.params, crate::energy::decode_state(bytes)?, "groups")
     }
     fn num_elements(&self) -> usize {
         self.triangles.len()

@@ -19,5 +19,5 @@ pub use dual::HyperDual;
 pub use potential::{run_kernel, FastDerivatives, Kernel, Node, Potential, PotentialTerm, Stencil};
 pub use scalar::Scalar;
 pub use tensor::{flat_from_points, points_from_flat, Mat, Mat2, Mat3, Mat32, Vec3};
-pub use term::{EnergyTerm, EvalMode, StepCheck};
+pub use term::{decode_state, encode_state, restore_vec, EnergyTerm, EvalMode, StepCheck};
 pub use user_energy::{trace_element, ElementArgs, UserEnergy, UserEnergyTerm};

@@ -20,7 +20,7 @@ use std::sync::Mutex;
 
 /// A node of an element stencil: something with a world position that the kinematic map
 /// connects to DOFs.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Node {
     /// A node of the simulation's node arrays: a deformable node (its DOF block is its velocity,
     /// `∂x/∂v = dt·I`) or a rigid body's mesh vertex (it moves with its body).
@@ -214,6 +214,14 @@ pub trait Potential<const N: usize>: Send + Sync {
     }
     /// See [`EnergyTerm::after_step`].
     fn after_step(&mut self, _state: &EvalState) {}
+    /// See [`EnergyTerm::save_state`].
+    fn save_state(&self) -> Vec<u8> {
+        Vec::new()
+    }
+    /// See [`EnergyTerm::restore_state`].
+    fn restore_state(&mut self, _bytes: &[u8]) -> Result<(), String> {
+        Ok(())
+    }
 }
 
 /// Value, gradient and Hessian of element `e` with respect to its node positions, by hyper-duals
@@ -451,5 +459,11 @@ impl<P: Potential<N>, const N: usize> EnergyTerm for PotentialTerm<P, N> {
     }
     fn after_step(&mut self, state: &EvalState) {
         self.potential.after_step(state)
+    }
+    fn save_state(&self) -> Vec<u8> {
+        self.potential.save_state()
+    }
+    fn restore_state(&mut self, bytes: &[u8]) -> Result<(), String> {
+        self.potential.restore_state(bytes)
     }
 }

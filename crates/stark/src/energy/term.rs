@@ -99,4 +99,41 @@ pub trait EnergyTerm: Send + Sync {
 
     /// Called once a step is accepted.
     fn after_step(&mut self, _state: &EvalState) {}
+
+    /// The term's mutable state — whatever the next step depends on that building the scene
+    /// again does not recreate (hardened stiffnesses, targets, parameters changed at run time,
+    /// adaptive stiffness) — as bytes for a checkpoint. The default, for terms without such
+    /// state, is empty.
+    fn save_state(&self) -> Vec<u8> {
+        Vec::new()
+    }
+
+    /// Restore what [`save_state`](Self::save_state) returned, on a term built the same way
+    /// (the error says what does not fit).
+    fn restore_state(&mut self, _bytes: &[u8]) -> Result<(), String> {
+        Ok(())
+    }
+}
+
+/// Encode a term's state for [`EnergyTerm::save_state`] (postcard, like the checkpoint file).
+pub fn encode_state<T: serde::Serialize + ?Sized>(state: &T) -> Vec<u8> {
+    postcard::to_allocvec(state).expect("term state is serialisable")
+}
+
+/// Decode a term's state in [`EnergyTerm::restore_state`].
+pub fn decode_state<T: serde::de::DeserializeOwned>(bytes: &[u8]) -> Result<T, String> {
+    postcard::from_bytes(bytes).map_err(|e| format!("its saved state does not decode ({e})"))
+}
+
+/// Restore per-group parameters saved with [`encode_state`], checking the group count.
+pub fn restore_vec<T>(into: &mut Vec<T>, from: Vec<T>, what: &str) -> Result<(), String> {
+    if into.len() != from.len() {
+        return Err(format!(
+            "{} {what} saved, {} in the rebuilt scene",
+            from.len(),
+            into.len()
+        ));
+    }
+    *into = from;
+    Ok(())
 }

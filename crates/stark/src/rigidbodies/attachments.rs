@@ -72,9 +72,26 @@ impl RigidAttachmentSet {
     }
 }
 
+impl RigidAttachmentSet {
+    /// Every deformable node attached to a body (global indices, with repeats).
+    pub fn attached_nodes(&self) -> impl Iterator<Item = u32> + '_ {
+        self.elements.iter().flatten().filter_map(|n| match n {
+            Node::Point(i) => Some(*i),
+            _ => None,
+        })
+    }
+}
+
 impl Potential<2> for RigidAttachmentSet {
     fn name(&self) -> &str {
         "rigid attachments"
+    }
+    fn save_state(&self) -> Vec<u8> {
+        // Hardened stiffnesses live in the parameters.
+        crate::energy::encode_state(&self.groups.params)
+    }
+    fn restore_state(&mut self, bytes: &[u8]) -> Result<(), String> {
+        crate::energy::restore_vec(&mut self.groups.params, crate::energy::decode_state(bytes)?, "groups")
     }
     fn num_elements(&self) -> usize {
         self.elements.len()

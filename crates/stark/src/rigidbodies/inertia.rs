@@ -109,6 +109,13 @@ impl EnergyTerm for RigidInertia {
     fn name(&self) -> &str {
         "rigid body inertia"
     }
+    fn save_state(&self) -> Vec<u8> {
+        // Damping and other per-body parameters may change between steps.
+        crate::energy::encode_state(&self.params)
+    }
+    fn restore_state(&mut self, bytes: &[u8]) -> std::result::Result<(), String> {
+        crate::energy::restore_vec(&mut self.params, crate::energy::decode_state(bytes)?, "bodies")
+    }
     fn num_elements(&self) -> usize {
         self.params.len() + self.pinned.len()
     }

@@ -6,4 +6,4 @@ pub mod newton;
 pub mod settings;
 
 pub use newton::{ConvergedBy, NewtonFailure, NewtonReport, PhaseTimes};
-pub use settings::{LinearSolver, NewtonSettings, OutputSettings, Projection, Settings};
+pub use settings::{FrameFormat, LinearSolver, NewtonSettings, OutputSettings, Projection, Settings};

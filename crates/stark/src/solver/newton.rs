@@ -31,7 +31,7 @@ pub enum ConvergedBy {
 }
 
 /// Wall time spent per phase, s.
-#[derive(Clone, Copy, Debug, Default, Serialize)]
+#[derive(Clone, Copy, Debug, Default, Serialize, serde::Deserialize)]
 pub struct PhaseTimes {
     /// Active-set updates (contact detection) before evaluations.
     pub prepare_s: f64,

@@ -79,8 +79,10 @@ pub struct OutputSettings {
     pub directory: PathBuf,
     /// Frames per simulated second; 0 disables frames (default: 30).
     pub fps: f64,
-    /// Write VTK frames (default: true).
+    /// Write frames (default: true).
     pub frames: bool,
+    /// File format of the frames (default: `vtu`, with a `.pvd` series carrying the times).
+    pub frame_format: FrameFormat,
     /// Write the per-step log `<name>.steps.jsonl` (default: true). Off, it also turns off the
     /// body and joint logs.
     pub step_log: bool,
@@ -92,12 +94,25 @@ pub struct OutputSettings {
     pub joints_log: bool,
 }
 
+/// File format of the output frames.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FrameFormat {
+    /// VTK XML unstructured grids (`.vtu`, binary data) with point and cell fields, and a
+    /// `<name>.pvd` collection per run that gives ParaView each frame's simulated time.
+    #[default]
+    Vtu,
+    /// Legacy VTK (`.vtk`, binary) with the node velocity only.
+    LegacyVtk,
+}
+
 impl Default for OutputSettings {
     fn default() -> Self {
         OutputSettings {
             directory: PathBuf::from("output"),
             fps: 30.0,
             frames: true,
+            frame_format: FrameFormat::Vtu,
             step_log: true,
             bodies_log: true,
             joints_log: true,

@@ -66,3 +66,37 @@ fn bad_input_gives_clear_errors() {
     let err = Simulation::new(settings).err().unwrap().to_string();
     assert!(err.contains("time_step_s"), "{err}");
 }
+
+/// `--set` overrides (`load_scene_with_overrides`): a value reaches the simulation, and a path
+/// that selects nothing is an error naming the override and what exists.
+#[test]
+fn scene_overrides_apply_or_name_the_bad_path() {
+    let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/rb_pendulum_chain.toml");
+    let load = |o: &[&str]| {
+        let o: Vec<String> = o.iter().map(|s| s.to_string()).collect();
+        stark::io::load_scene_with_overrides(&scene, &o, |s| s.output.step_log = false)
+    };
+    let ok = load(&[
+        "settings.time_step_s=0.005",
+        "joint.motor.max_torque_n_m=2.5",
+        "duration_s=1",
+    ])
+    .unwrap();
+    assert_eq!(ok.simulation.settings.time_step_s, 0.005);
+    assert_eq!(ok.duration_s, 1.0);
+    assert_eq!(ok.name, "rb_pendulum_chain");
+    let err = |o: &[&str]| load(o).err().expect("an error").to_string();
+    let e = err(&["joint.elbow.stiffness=1"]);
+    assert!(
+        e.contains("no entry named 'elbow'") && e.contains("pivot, hinge1"),
+        "{e}"
+    );
+    let e = err(&["rigid_body.9.mass_kg=1"]);
+    assert!(e.contains("there is no entry 9"), "{e}");
+    let e = err(&["duration_s.x=1"]);
+    assert!(e.contains("`duration_s` is a float, not a table"), "{e}");
+    let e = err(&["settings.time_step=0.01"]);
+    assert!(e.contains("time_step"), "{e}");
+    let e = err(&["settings.time_step_s"]);
+    assert!(e.contains("expected key.path=value"), "{e}");
+}

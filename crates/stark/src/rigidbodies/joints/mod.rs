@@ -156,7 +156,7 @@ impl Measure {
 /// mass up to `O(ω·dt)`: for a body turning by `ω·dt` per step, the moment taken at the
 /// end-of-step pose is rotated by about `ω·dt/2` against it (8% of the load for a body spinning
 /// at 16 rad/s with dt = 10 ms, which the generalised torque does not suffer).
-#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct JointReadout {
     /// Violation: m, or rad for angular primitives.
     pub violation: f64,
@@ -168,6 +168,59 @@ pub struct JointReadout {
     pub force_b_n: [f64; 3],
     /// Torque on body b about its centre of mass, N·m.
     pub torque_b_n_m: [f64; 3],
+}
+
+/// The parameters of a primitive, in a fixed order (targets and limits change at run time).
+/// A checkpoint stores these rather than the `Primitive` itself, whose internally tagged serde
+/// form postcard cannot read.
+fn primitive_parameters(p: &mut Primitive) -> Vec<&mut f64> {
+    match p {
+        Primitive::Point
+        | Primitive::PointOnAxis
+        | Primitive::PointOnPlane
+        | Primitive::Direction
+        | Primitive::Perpendicular => vec![],
+        // Its start-of-step coordinates are measured again at the next step; its parameters
+        // change at run time.
+        Primitive::Coupling(c) => {
+            let c = &mut **c;
+            let mut v = vec![&mut c.multiplier, &mut c.offset, &mut c.damping];
+            if let Some(a) = c.a.as_mut() {
+                v.push(&mut a.q0);
+            }
+            v.push(&mut c.b.q0);
+            v
+        }
+        Primitive::Distance { target_m } => vec![target_m],
+        Primitive::DistanceLimits { min_m, max_m } => vec![min_m, max_m],
+        Primitive::AngleLimit { limit_rad } => vec![limit_rad],
+        Primitive::Spring {
+            rest_length_m,
+            damping_n_s_m,
+        } => vec![rest_length_m, damping_n_s_m],
+        Primitive::LinearVelocity {
+            target_m_s,
+            max_force_n,
+            delay_m_s,
+        } => vec![target_m_s, max_force_n, delay_m_s],
+        Primitive::AngularVelocity {
+            target_rad_s,
+            max_torque_n_m,
+            delay_rad_s,
+        } => vec![target_rad_s, max_torque_n_m, delay_rad_s],
+    }
+}
+
+/// What a checkpoint keeps of a joint element.
+#[derive(serde::Serialize, serde::Deserialize)]
+struct SavedJointElement {
+    parameters: Vec<f64>,
+    nodes: [Node; 4],
+    stiffness: f64,
+    tolerance: f64,
+    enabled: bool,
+    servo: Option<(f64, f64)>,
+    readout: JointReadout,
 }
 
 /// All joint elements of a simulation.
@@ -234,6 +287,65 @@ impl JointSet {
 impl Potential<4> for JointSet {
     fn name(&self) -> &str {
         "joints"
+    }
+    fn save_state(&self) -> Vec<u8> {
+        // Hardened stiffnesses, targets and world anchors (`set_*` between steps, time events),
+        // servo targets and the last readouts (the joint log's next line depends on nothing else).
+        let saved: Vec<SavedJointElement> = self
+            .elements
+            .iter()
+            .map(|e| SavedJointElement {
+                parameters: primitive_parameters(&mut e.primitive.clone())
+                    .into_iter()
+                    .map(|p| *p)
+                    .collect(),
+                nodes: e.nodes,
+                stiffness: e.stiffness,
+                tolerance: e.tolerance,
+                enabled: e.enabled,
+                servo: e.servo.map(|s| (s.target, s.response_time_s)),
+                readout: e.readout,
+            })
+            .collect();
+        crate::energy::encode_state(&saved)
+    }
+    fn restore_state(&mut self, bytes: &[u8]) -> Result<(), String> {
+        let saved: Vec<SavedJointElement> = crate::energy::decode_state(bytes)?;
+        if saved.len() != self.elements.len() {
+            return Err(format!(
+                "{} joint elements saved, {} in the rebuilt scene",
+                saved.len(),
+                self.elements.len()
+            ));
+        }
+        for (e, s) in self.elements.iter_mut().zip(saved) {
+            if e.servo.is_some() != s.servo.is_some() {
+                return Err(format!(
+                    "joint '{}' has a servo in only one of checkpoint and scene",
+                    e.label
+                ));
+            }
+            let mut params = primitive_parameters(&mut e.primitive);
+            if params.len() != s.parameters.len() {
+                return Err(format!(
+                    "joint '{}' has another kind of primitive than the saved one",
+                    e.label
+                ));
+            }
+            for (p, v) in params.iter_mut().zip(&s.parameters) {
+                **p = *v;
+            }
+            e.nodes = s.nodes;
+            e.stiffness = s.stiffness;
+            e.tolerance = s.tolerance;
+            e.enabled = s.enabled;
+            if let (Some(servo), Some((target, response_time_s))) = (e.servo.as_mut(), s.servo) {
+                servo.target = target;
+                servo.response_time_s = response_time_s;
+            }
+            e.readout = s.readout;
+        }
+        Ok(())
     }
     fn num_elements(&self) -> usize {
         self.elements.len()

@@ -1,0 +1,170 @@
+//! The `stark` command as a user runs it: exact durations, several scene files, `--set`,
+//! aligned `list`, Ctrl-C (SIGINT) with summary, complete logs and a checkpoint that resumes.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+fn stark() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_stark"))
+}
+
+fn scene(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes").join(name)
+}
+
+fn ok(out: Output) -> String {
+    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(
+        out.status.success(),
+        "stark failed: {}\n{stdout}{}",
+        out.status,
+        String::from_utf8_lossy(&out.stderr)
+    );
+    stdout
+}
+
+fn log_lines(path: &Path) -> Vec<serde_json::Value> {
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect()
+}
+
+#[test]
+fn duration_lands_exactly_and_several_scenes_run_with_overrides() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = ok(stark()
+        .args([
+            "run",
+            "--quiet",
+            "--no-plot",
+            "--duration",
+            "0.25",
+            "--set",
+            "settings.output.fps=10",
+        ])
+        .arg(scene("default.toml"))
+        .arg(scene("rb_pendulum_chain.toml"))
+        .arg("--out")
+        .arg(dir.path())
+        .output()
+        .unwrap());
+    assert!(
+        out.contains("== default") && out.contains("== rb_pendulum_chain"),
+        "{out}"
+    );
+    for (name, dt) in [("default", 1.0 / 30.0), ("rb_pendulum_chain", 0.01)] {
+        let lines = log_lines(&dir.path().join(name).join(format!("{name}.steps.jsonl")));
+        let last = lines.last().unwrap();
+        // To the rounding of the summed steps (25 × 0.01 s is 0.25000000000000006).
+        let t = last["time_s"].as_f64().unwrap();
+        assert!((t - 0.25).abs() < 1e-15, "{name} ends at {t}, not at 0.25 s");
+        let full = lines
+            .iter()
+            .filter(|l| (l["dt_s"].as_f64().unwrap() - dt).abs() < 1e-12)
+            .count();
+        assert!(full >= lines.len() - 1, "{name}: only the last step may be shortened");
+    }
+    // 0.25 s = 7 steps of 1/30 s and one of 1/60 s, which ends on 0.25 to the bit.
+    let default_log = log_lines(&dir.path().join("default/default.steps.jsonl"));
+    assert_eq!(default_log.len(), 8);
+    assert_eq!(default_log[7]["time_s"].as_f64().unwrap(), 0.25);
+    assert!((default_log[7]["dt_s"].as_f64().unwrap() - 1.0 / 60.0).abs() < 1e-12);
+
+    let bad = stark()
+        .args(["run", "--quiet", "--set", "surface.sheet.material=cotton_fabric"])
+        .arg(scene("default.toml"))
+        .output()
+        .unwrap();
+    assert!(!bad.status.success());
+    let e = String::from_utf8_lossy(&bad.stderr);
+    assert!(e.contains("no entry named 'sheet'") && e.contains("cloth"), "{e}");
+}
+
+#[test]
+fn list_is_aligned() {
+    let out = ok(stark().arg("list").output().unwrap());
+    let lines: Vec<&str> = out.lines().collect();
+    assert!(lines.len() > 5);
+    let column = |l: &str| l.find(" s  ").map(|i| i + 4);
+    let header_col = lines[0].find("description").unwrap();
+    for l in &lines[1..] {
+        assert_eq!(column(l), Some(header_col), "misaligned: {l}");
+    }
+}
+
+#[cfg(unix)]
+#[test]
+fn sigint_prints_the_summary_keeps_the_logs_and_the_checkpoint_resumes() {
+    let dir = tempfile::tempdir().unwrap();
+    let log = dir.path().join("rb_pendulum_chain.steps.jsonl");
+    let child = stark()
+        .args(["run", "--quiet", "--no-plot", "--duration", "1000", "--threads", "1"])
+        .arg(scene("rb_pendulum_chain.toml"))
+        .arg("--out")
+        .arg(dir.path())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Wait until some steps have been logged (the BufWriter flushes every 8 KiB).
+    let start = Instant::now();
+    while std::fs::metadata(&log).map(|m| m.len()).unwrap_or(0) < 20_000 {
+        assert!(start.elapsed() < Duration::from_secs(120), "the run does not log");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let kill = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    let out = child.wait_with_output().unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(
+        out.status.code(),
+        Some(130),
+        "{stdout}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        stdout.contains("simulated time") && stdout.contains("interrupted"),
+        "{stdout}"
+    );
+    // The summary's step count equals the log's lines: nothing lost.
+    let steps: usize = stdout
+        .lines()
+        .find(|l| l.starts_with("simulated time"))
+        .and_then(|l| l.split(" in ").nth(1))
+        .and_then(|l| l.split(' ').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap();
+    let lines = log_lines(&log);
+    assert_eq!(lines.len(), steps);
+    assert_eq!(
+        log_lines(&dir.path().join("rb_pendulum_chain.joints.jsonl")).len(),
+        steps
+    );
+    let ckpt = dir.path().join("rb_pendulum_chain.ckpt");
+    assert!(ckpt.exists());
+    let t_stop = lines.last().unwrap()["time_s"].as_f64().unwrap();
+
+    let resumed = ok(stark()
+        .args(["resume", "--quiet", "--no-plot", "--duration", "0.1"])
+        .arg(&ckpt)
+        .output()
+        .unwrap());
+    assert!(resumed.contains("resuming"), "{resumed}");
+    let lines = log_lines(&log);
+    assert_eq!(lines.len(), steps + 10, "0.1 s more at dt = 0.01 s");
+    let t_end = lines.last().unwrap()["time_s"].as_f64().unwrap();
+    assert!((t_end - (t_stop + 0.1)).abs() < 1e-9, "{t_end} vs {t_stop} + 0.1");
+    for (i, l) in lines.iter().enumerate() {
+        assert_eq!(
+            l["step"].as_u64().unwrap(),
+            i as u64,
+            "the step log continues without a gap"
+        );
+    }
+}

@@ -1,0 +1,241 @@
+//! Checkpoints: the whole state the next step depends on, in one versioned binary file, so that
+//! a run continues from it bit-identically.
+//!
+//! A checkpoint does not hold the scene itself: the program that made the run builds it again
+//! (a scene file, a built-in scene, or its own code), then
+//! [`Simulation::restore_checkpoint`] puts the state back. What is saved:
+//!
+//! - node and rigid-body state (positions, velocities, poses, external forces), time, the current
+//!   `dt` (its growth after failed steps continues), the settings (time events may change
+//!   gravity or any other setting), the run's counters and the output's frame counter and frame
+//!   times;
+//! - every energy term's own mutable state through
+//!   [`EnergyTerm::save_state`](crate::energy::EnergyTerm::save_state): hardened joint,
+//!   attachment and prescribed stiffnesses, prescribed targets, joint targets and anchors,
+//!   parameters changed at run time, the adaptive barrier stiffness.
+//!
+//! Time events come back with the scene: a scene file's events are rebuilt with it, and a program
+//! that registered closures (`add_time_event`) registers them again before restoring. Lagged
+//! friction and contact pairs are recomputed from the positions at the start of every step, so
+//! they need no saving.
+//!
+//! The file is a postcard-encoded [`CheckpointHeader`] (magic, format version, a hash of the
+//! scene's structure, where the scene came from, the state's length and checksum) followed by the
+//! postcard-encoded state. Reading checks each in turn, so a file of another scene, a truncated
+//! file or one of another format version is refused with a message saying which.
+
+use crate::error::{Result, StarkError};
+use crate::simulation::RunSummary;
+use crate::solver::Settings;
+use crate::state::{BodyArrays, NodeArrays};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// The format version this build writes and reads.
+pub const CHECKPOINT_FORMAT_VERSION: u32 = 1;
+
+/// First bytes of every checkpoint file.
+const MAGIC: [u8; 8] = *b"STARKCKP";
+
+/// Where a simulation's scene came from, so that `stark resume` can build it again.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum SceneOrigin {
+    /// A built-in scene (`stark list`).
+    Builtin {
+        /// Its name.
+        name: String,
+    },
+    /// A scene file with `--set` overrides applied in order.
+    File {
+        /// The file (absolute when written by `stark run`).
+        path: PathBuf,
+        /// `key.path=value` overrides.
+        overrides: Vec<String>,
+    },
+    /// Built by a program: that program restores it.
+    Program,
+}
+
+/// The header of a checkpoint file: everything needed to decide whether (and how) to restore it.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct CheckpointHeader {
+    magic: [u8; 8],
+    /// Format version of the file.
+    pub format_version: u32,
+    /// Hash of the scene's structure ([`Simulation::scene_hash`](crate::Simulation::scene_hash)).
+    pub scene_hash: u64,
+    /// Scene name.
+    pub scene: String,
+    /// Where the scene came from.
+    pub origin: SceneOrigin,
+    /// Output directory of the run that wrote it.
+    pub output_directory: PathBuf,
+    /// Simulated time at the checkpoint, s.
+    pub time_s: f64,
+    /// Accepted steps at the checkpoint.
+    pub steps: u64,
+    state_len: u64,
+    state_checksum: u64,
+}
+
+/// The state after the header.
+#[derive(Serialize, Deserialize)]
+pub(crate) struct SimulationState {
+    pub nodes: NodeArrays,
+    pub bodies: BodyArrays,
+    pub settings: Settings,
+    pub time_s: f64,
+    pub dt_s: f64,
+    pub summary: RunSummary,
+    pub frames_written: usize,
+    pub next_frame_time_s: f64,
+    pub frame_times_s: Vec<f64>,
+    /// Each term's name and saved state, in the simulation's term order.
+    pub terms: Vec<(String, Vec<u8>)>,
+}
+
+/// FNV-1a, 64 bit: a stable hash (the standard library's is not stable across builds).
+#[derive(Clone, Copy)]
+pub(crate) struct Fnv(u64);
+
+impl Default for Fnv {
+    fn default() -> Self {
+        Fnv(0xcbf2_9ce4_8422_2325)
+    }
+}
+
+impl Fnv {
+    pub fn bytes(&mut self, b: &[u8]) {
+        for &x in b {
+            self.0 ^= u64::from(x);
+            self.0 = self.0.wrapping_mul(0x0100_0000_01b3);
+        }
+    }
+    pub fn u64(&mut self, v: u64) {
+        self.bytes(&v.to_le_bytes());
+    }
+    pub fn f64(&mut self, v: f64) {
+        self.u64(v.to_bits());
+    }
+    pub fn str(&mut self, s: &str) {
+        self.u64(s.len() as u64);
+        self.bytes(s.as_bytes());
+    }
+    pub fn finish(self) -> u64 {
+        self.0
+    }
+}
+
+fn err(path: &Path, message: impl Into<String>) -> StarkError {
+    StarkError::Checkpoint {
+        path: path.display().to_string(),
+        message: message.into(),
+    }
+}
+
+/// Write `header` (its length and checksum filled in) and `state` to `path`, atomically: a
+/// temporary file renamed over the target, so an interrupted write never leaves a broken file.
+pub(crate) fn write(path: &Path, mut header: CheckpointHeader, state: &SimulationState) -> Result<()> {
+    let body = postcard::to_allocvec(state).map_err(|e| err(path, format!("cannot encode the state: {e}")))?;
+    header.magic = MAGIC;
+    header.format_version = CHECKPOINT_FORMAT_VERSION;
+    header.state_len = body.len() as u64;
+    let mut h = Fnv::default();
+    h.bytes(&body);
+    header.state_checksum = h.finish();
+    let mut bytes = postcard::to_allocvec(&header).map_err(|e| err(path, format!("cannot encode the header: {e}")))?;
+    bytes.extend_from_slice(&body);
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(|e| err(path, format!("cannot create its directory: {e}")))?;
+    }
+    let tmp = path.with_extension("ckpt-partial");
+    std::fs::write(&tmp, &bytes).map_err(|e| err(path, format!("cannot write: {e}")))?;
+    std::fs::rename(&tmp, path).map_err(|e| err(path, format!("cannot rename the finished file into place: {e}")))
+}
+
+/// Build a header for [`write`] (length and checksum are filled in there).
+pub(crate) fn header(
+    scene_hash: u64,
+    scene: &str,
+    origin: SceneOrigin,
+    output_directory: &Path,
+    time_s: f64,
+    steps: u64,
+) -> CheckpointHeader {
+    CheckpointHeader {
+        magic: MAGIC,
+        format_version: CHECKPOINT_FORMAT_VERSION,
+        scene_hash,
+        scene: scene.to_string(),
+        origin,
+        output_directory: output_directory.to_path_buf(),
+        time_s,
+        steps,
+        state_len: 0,
+        state_checksum: 0,
+    }
+}
+
+fn read_bytes(path: &Path) -> Result<Vec<u8>> {
+    std::fs::read(path).map_err(|e| err(path, format!("cannot read: {e}")))
+}
+
+fn parse_header<'a>(path: &Path, bytes: &'a [u8]) -> Result<(CheckpointHeader, &'a [u8])> {
+    if bytes.len() < MAGIC.len() || bytes[..MAGIC.len()] != MAGIC {
+        return Err(err(path, "not a Stark checkpoint (its first bytes are not STARKCKP)"));
+    }
+    // The version follows the magic; check it before decoding the rest of a header whose layout
+    // may have changed.
+    let (version, _): (u32, _) = postcard::take_from_bytes(&bytes[MAGIC.len()..])
+        .map_err(|_| err(path, "the file is truncated inside its header"))?;
+    if version != CHECKPOINT_FORMAT_VERSION {
+        return Err(err(
+            path,
+            format!("format version {version}; this build reads version {CHECKPOINT_FORMAT_VERSION}"),
+        ));
+    }
+    let (header, rest): (CheckpointHeader, _) =
+        postcard::take_from_bytes(bytes).map_err(|_| err(path, "the file is truncated inside its header"))?;
+    if (rest.len() as u64) < header.state_len {
+        return Err(err(
+            path,
+            format!(
+                "the file is truncated: {} bytes of state, the header announces {}",
+                rest.len(),
+                header.state_len
+            ),
+        ));
+    }
+    let body = &rest[..header.state_len as usize];
+    let mut h = Fnv::default();
+    h.bytes(body);
+    if h.finish() != header.state_checksum {
+        return Err(err(path, "the state does not match its checksum (the file is damaged)"));
+    }
+    Ok((header, body))
+}
+
+/// Read only the header of a checkpoint (to find the scene to build again).
+pub fn read_header(path: &Path) -> Result<CheckpointHeader> {
+    let bytes = read_bytes(path)?;
+    Ok(parse_header(path, &bytes)?.0)
+}
+
+/// Read a checkpoint, checking that it belongs to a scene of hash `scene_hash`.
+pub(crate) fn read(path: &Path, scene_hash: u64, scene: &str) -> Result<(CheckpointHeader, SimulationState)> {
+    let bytes = read_bytes(path)?;
+    let (header, body) = parse_header(path, &bytes)?;
+    if header.scene_hash != scene_hash {
+        return Err(err(
+            path,
+            format!(
+                "it is a checkpoint of scene '{}' (structure hash {:016x}), not of this scene '{scene}' ({scene_hash:016x}): \
+                 objects, elements, bodies, joints or events differ",
+                header.scene, header.scene_hash
+            ),
+        ));
+    }
+    let state: SimulationState =
+        postcard::from_bytes(body).map_err(|e| err(path, format!("the state does not decode: {e}")))?;
+    Ok((header, state))
+}
