@@ -1405,6 +1405,20 @@ fn mesh_path(base_dir: &Path, file: &str) -> std::path::PathBuf {
     base_dir.join(file)
 }
 
+/// The shape of an entry's inline mesh (`vertices_m` and `triangles`, checked present).
+fn inline_mesh(vertices_m: &Option<Vec<[f64; 3]>>, triangles: &Option<Vec<[usize; 3]>>, scale: Vector3<f64>) -> Shape {
+    Shape::Mesh {
+        vertices_m: vertices_m
+            .as_ref()
+            .expect("checked")
+            .iter()
+            .map(|v| Vector3::from(*v))
+            .collect(),
+        triangles: triangles.clone().expect("checked"),
+        scale,
+    }
+}
+
 fn build_surface(
     sim: &mut Simulation,
     ctx: &Ctx,
@@ -1610,17 +1624,7 @@ fn build_obstacle(
             base_dir,
             e.mesh.as_deref().expect("checked"),
         ))),
-        "vertices_m" => Some(Shape::Mesh {
-            vertices_m: e
-                .vertices_m
-                .as_ref()
-                .expect("checked")
-                .iter()
-                .map(|v| Vector3::from(*v))
-                .collect(),
-            triangles: e.triangles.clone().expect("checked"),
-            scale: Vector3::repeat(1.0),
-        }),
+        "vertices_m" => Some(inline_mesh(&e.vertices_m, &e.triangles, Vector3::repeat(1.0))),
         _ => None,
     };
     let (mut vertices, triangles) = match shape {

@@ -260,17 +260,7 @@ fn shape(ctx: &Ctx, base_dir: &Path, at: &At, e: &RigidBodyEntry) -> Res<BodySha
             path: mesh_path(base_dir, e.mesh.as_deref().expect("checked")),
             scale,
         },
-        _ => Shape::Mesh {
-            vertices_m: e
-                .vertices_m
-                .as_ref()
-                .expect("checked")
-                .iter()
-                .map(|v| Vector3::from(*v))
-                .collect(),
-            triangles: e.triangles.clone().expect("checked"),
-            scale,
-        },
+        _ => super::inline_mesh(&e.vertices_m, &e.triangles, scale),
     };
     let located = |err: ShapeError| {
         let hint = if err.field == "surface" {
