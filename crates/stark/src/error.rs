@@ -72,8 +72,8 @@ pub enum StarkError {
         /// The I/O error.
         source: std::io::Error,
     },
-    /// The time step could not be completed even at the smallest allowed step size.
-    #[error("time step at t = {time_s:.6} s failed at dt = {dt_s:e} s (below the minimum {dt_min_s:e} s): {reason}")]
+    /// A time step could not be completed: its last attempt failed and no retry was left.
+    #[error("time step at t = {time_s:.6} s failed at dt = {dt_s:e} s: {reason} ({no_retry})")]
     StepFailed {
         /// Simulation time, s.
         time_s: f64,
@@ -83,6 +83,9 @@ pub enum StarkError {
         dt_min_s: f64,
         /// Why the last attempt failed.
         reason: String,
+        /// Why it was not retried: the time step is fixed, halving it would go below the
+        /// minimum, or the hardening retries are used up.
+        no_retry: String,
     },
     /// A run was interrupted (Ctrl-C) between steps; every accepted step is kept.
     #[error("interrupted at t = {time_s:.6} s")]

@@ -448,9 +448,12 @@ impl Simulation {
             };
             self.run_events(t_end)?;
             self.contact.settings = self.settings.contact.clone();
-            let mut masses = self.deformables.inertia.node_masses(self.nodes.len());
-            RigidBodies::add_node_masses(&self.nodes, &self.bodies, &mut masses);
-            self.contact.initialize_stiffness(&masses, self.settings.time_step_s);
+            if self.contact.needs_stiffness() {
+                let mut masses = self.deformables.inertia.node_masses(self.nodes.len());
+                RigidBodies::set_node_contact_masses(&self.nodes, &self.bodies, &mut masses);
+                let g = self.gravity().norm();
+                self.contact.initialize_stiffness(&masses, self.settings.time_step_s, g);
+            }
             let gravity = self.gravity();
             let newton_settings = self.settings.newton.clone();
             let mut velocities = std::mem::take(&mut self.velocities);
@@ -550,10 +553,8 @@ impl Simulation {
                                 time_s: self.time,
                                 dt_s: dt,
                                 dt_min_s: self.settings.min_time_step_s,
-                                reason: format!(
-                                    "still out of tolerance after {hardening_retries} hardenings: {}",
-                                    retry.join("; ")
-                                ),
+                                reason: format!("still out of tolerance: {}", retry.join("; ")),
+                                no_retry: format!("after {hardening_retries} hardenings, the most allowed"),
                             });
                         }
                         continue;
@@ -629,11 +630,20 @@ impl Simulation {
                     self.summary.failed_steps += 1;
                     let half = dt * 0.5;
                     if !self.settings.adaptive_time_step || half < self.settings.min_time_step_s {
+                        let no_retry = if self.settings.adaptive_time_step {
+                            format!(
+                                "halving dt would go below the minimum {:e} s",
+                                self.settings.min_time_step_s
+                            )
+                        } else {
+                            "the time step is fixed: adaptive_time_step is off".to_string()
+                        };
                         return Err(StarkError::StepFailed {
                             time_s: self.time,
                             dt_s: dt,
                             dt_min_s: self.settings.min_time_step_s,
                             reason: failure.to_string(),
+                            no_retry,
                         });
                     }
                     self.dt = half;

@@ -2,14 +2,17 @@
 //! does not recreate. Pairs, lagged friction and candidates are recomputed from the positions at
 //! the start of every step, so they are not saved.
 
+use super::stiffness::PairStiffness;
 use super::{Contact, ContactStats};
 use serde::{Deserialize, Serialize};
 
 #[derive(Serialize, Deserialize)]
 struct SavedContact {
-    /// Adaptive barrier stiffness κ and its initial value (its growth is bounded by it), N/m.
-    kappa: f64,
-    kappa_initial: f64,
+    /// Barrier stiffness κ of every pair of objects: current, initial (its growth is bounded by
+    /// it), inertial floor and whether its load was measured.
+    kappa: PairStiffness,
+    /// Mean contact mass of each object, kg (the kinematic objects are those with 0).
+    object_masses_kg: Vec<f64>,
     /// Enabled object pairs and friction coefficients (changeable between steps).
     enabled: Vec<bool>,
     friction: Vec<f64>,
@@ -20,8 +23,8 @@ struct SavedContact {
 impl Contact {
     pub(super) fn save_checkpoint_state(&self) -> Vec<u8> {
         crate::energy::encode_state(&SavedContact {
-            kappa: self.kappa,
-            kappa_initial: self.kappa_initial,
+            kappa: self.kappa.clone(),
+            object_masses_kg: self.object_masses_kg.clone(),
             enabled: self.enabled.clone(),
             friction: self.friction.clone(),
             stats: self.stats,
@@ -32,8 +35,15 @@ impl Contact {
         let saved: SavedContact = crate::energy::decode_state(bytes)?;
         crate::energy::restore_vec(&mut self.enabled, saved.enabled, "object pairs")?;
         crate::energy::restore_vec(&mut self.friction, saved.friction, "object pairs")?;
+        if saved.kappa.objects() != self.objects.len() {
+            return Err(format!(
+                "the checkpoint has barrier stiffnesses for {} contact objects, the scene {}",
+                saved.kappa.objects(),
+                self.objects.len()
+            ));
+        }
         self.kappa = saved.kappa;
-        self.kappa_initial = saved.kappa_initial;
+        self.object_masses_kg = saved.object_masses_kg;
         self.stats = saved.stats;
         Ok(())
     }

@@ -238,7 +238,7 @@ mod tests {
             .add_object("point", point, &rest, &[], &[], &[0], thickness)
             .unwrap();
         contact.set_friction(a, b, mu).unwrap();
-        contact.initialize_stiffness(&[1.0; 4], dt);
+        contact.initialize_stiffness(&[1.0; 4], dt, 0.0);
         let zeros = vec![Vector3::zeros(); 4];
         let mut x_end = nodes.x.clone();
         x_end[3].x += slide;

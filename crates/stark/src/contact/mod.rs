@@ -10,6 +10,7 @@ pub mod barrier;
 mod checkpoint;
 pub mod friction;
 pub mod pairs;
+pub mod stiffness;
 pub use barrier::BarrierKind;
 
 use crate::deformables::NodeSetHandle;
@@ -35,6 +36,7 @@ pub use pairs::PairHessian;
 use pairs::{pair_derivatives, pair_energy, ContactPair, PairKind};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+use stiffness::{object_contact_masses, PairStiffness};
 
 /// Contact settings (part of the simulation settings).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -45,15 +47,18 @@ pub struct ContactSettings {
     pub default_thickness_m: Option<f64>,
     /// Barrier function (default: log, infinite at contact).
     pub barrier: BarrierKind,
-    /// Barrier stiffness `κ`, N/m; `None` chooses `m̄/dt²` from the mean mass `m̄` of the contact
-    /// nodes, which balances the barrier's curvature against inertia (default: automatic).
+    /// Barrier stiffness `κ` of every pair, N/m; `None` chooses one per pair of objects from the
+    /// masses they carry, the time step, gravity and `d̂` (see `contact::stiffness`; default:
+    /// automatic).
     pub stiffness: Option<f64>,
-    /// `κ` doubles after a step in which a pair came closer than this fraction of its `d̂`, up to
-    /// `max_stiffness_factor` times its initial value (default: 1e-3).
+    /// A pair of objects' `κ` doubles after a step in which one of their pairs came closer than
+    /// this fraction of its `d̂`, up to `max_stiffness_factor` times its initial value
+    /// (default: 1e-3).
     pub min_distance_fraction: f64,
     /// Upper bound of the adaptive `κ` relative to its initial value (default: 1e8).
     pub max_stiffness_factor: f64,
-    /// Relative speed below which friction sticks (the smoothing `ε_v`), m/s (default: 0.01).
+    /// Relative speed below which friction sticks (the smoothing `ε_v`), m/s (default: 1e-4: a
+    /// body held below its friction angle creeps at most this fast).
     pub friction_stick_slide_threshold_m_s: f64,
     /// Friction solves per step: 1 lags normal forces and tangents once from the start of the
     /// step; more re-lag them from the converged state and solve again (default: 1).
@@ -73,7 +78,7 @@ impl Default for ContactSettings {
             stiffness: None,
             min_distance_fraction: 1e-3,
             max_stiffness_factor: 1e8,
-            friction_stick_slide_threshold_m_s: 0.01,
+            friction_stick_slide_threshold_m_s: 1e-4,
             friction_iterations: 1,
             hessian: PairHessian::Projected,
             ccd: true,
@@ -179,8 +184,10 @@ pub struct Contact {
     friction: Vec<f64>,
     pairs: Vec<ContactPair>,
     friction_elements: Vec<FrictionElement>,
-    kappa: f64,
-    kappa_initial: f64,
+    /// `κ` per pair of objects.
+    kappa: PairStiffness,
+    /// Mean contact mass of each object (kg; 0: kinematic), set with the stiffness.
+    object_masses_kg: Vec<f64>,
     /// Smallest CCD fraction and exact CCD queries of the last line search (`max_step_fraction`
     /// takes `&self`).
     ccd_record: std::sync::Mutex<(f64, usize)>,
@@ -216,8 +223,8 @@ impl Default for Contact {
             friction: vec![],
             pairs: vec![],
             friction_elements: vec![],
-            kappa: 0.0,
-            kappa_initial: 0.0,
+            kappa: PairStiffness::default(),
+            object_masses_kg: vec![],
             ccd_record: std::sync::Mutex::new((1.0, 0)),
             candidate_cache: std::sync::Mutex::new(None),
             rigid_split: RigidSplit::default(),
@@ -251,6 +258,14 @@ impl RigidSplit {
     }
 }
 
+fn sorted_objects([a, b]: [u16; 2]) -> [u16; 2] {
+    if a < b {
+        [a, b]
+    } else {
+        [b, a]
+    }
+}
+
 fn sorted2(a: u32, b: u32) -> [u32; 2] {
     if a < b {
         [a, b]
@@ -270,9 +285,15 @@ impl Contact {
         &self.pairs
     }
 
-    /// Current barrier stiffness κ, N/m (0 before the first step).
+    /// The largest barrier stiffness κ of any pair of objects, N/m (0 before the first step).
     pub fn stiffness(&self) -> f64 {
-        self.kappa
+        self.kappa.max()
+    }
+
+    /// Barrier stiffness κ between two objects, N/m (0 before the first step that needs it).
+    pub fn pair_stiffness(&self, a: ContactHandle, b: ContactHandle) -> Result<f64> {
+        let (i, j) = (self.check(a)?, self.check(b)?);
+        Ok(self.kappa.get(i, j))
     }
 
     /// Register the surface of an object (indices local to `nodes`): its triangles, its edges
@@ -340,6 +361,7 @@ impl Contact {
         }
         self.enabled = enabled;
         self.friction = friction;
+        self.kappa.resize(m);
         self.version += 1;
         Ok(ContactHandle(id as u32))
     }
@@ -476,7 +498,7 @@ impl Contact {
             pair_derivatives(
                 p,
                 &Self::stencil_x(&p.nodes, x),
-                self.kappa * p.multiplicity,
+                p.kappa * p.multiplicity,
                 self.settings.barrier,
                 PairHessian::GaussNewton,
                 &mut d,
@@ -490,27 +512,27 @@ impl Contact {
         forces
     }
 
-    /// Choose the initial barrier stiffness (if not set) from the node masses and dt.
-    pub fn initialize_stiffness(&mut self, masses: &[f64], dt: f64) {
-        if self.kappa > 0.0 {
-            return;
-        }
-        self.kappa = self.settings.stiffness.unwrap_or_else(|| {
-            let contact_masses: Vec<f64> = self
-                .points
-                .iter()
-                .map(|&p| masses[p as usize])
-                .filter(|&m| m > 0.0)
-                .collect();
-            let mean = if contact_masses.is_empty() {
-                1.0
-            } else {
-                contact_masses.iter().sum::<f64>() / contact_masses.len() as f64
-            };
-            mean / (dt * dt)
-        });
-        self.kappa_initial = self.kappa;
-        self.stats.stiffness = self.kappa;
+    /// Some pair of objects has no barrier stiffness yet (see [`Contact::initialize_stiffness`]).
+    pub fn needs_stiffness(&self) -> bool {
+        self.kappa.needs_initialization()
+    }
+
+    /// Choose the barrier stiffness of the pairs of objects that have none (`contact::stiffness`)
+    /// from the nodes' effective contact masses (kg; 0 for kinematic nodes), the time step (s) and
+    /// the magnitude of gravity (m/s²).
+    pub fn initialize_stiffness(&mut self, node_masses_kg: &[f64], dt: f64, gravity_m_s2: f64) {
+        let masses = object_contact_masses(self.objects.len(), &self.points, &self.point_obj, node_masses_kg);
+        let thickness: Vec<f64> = self.objects.iter().map(|o| o.thickness_m).collect();
+        self.object_masses_kg = masses.clone();
+        self.kappa.initialize(
+            self.settings.stiffness,
+            &masses,
+            |a, b| thickness[a] + thickness[b],
+            dt,
+            gravity_m_s2,
+            self.settings.barrier,
+        );
+        self.stats.stiffness = self.kappa.max();
     }
 
     /// Candidate pairs for every state in which each contact point stays within `margin_m`
@@ -672,6 +694,8 @@ impl Contact {
             dhat,
             eps_x: 0.0,
             mu: self.mu(po, to),
+            kappa: self.kappa.get(po as usize, to as usize),
+            objects: [po, to],
             multiplicity: 1.0,
         })
     }
@@ -693,6 +717,7 @@ impl Contact {
             return None;
         }
         let mu = self.mu(oa, ob);
+        let kappa = self.kappa.get(oa as usize, ob as usize);
         let eps_x = 1e-3 * self.edge_rest_len_sq[a] * self.edge_rest_len_sq[b];
         if edge_edge_cross_norm_sq(a0, a1, b0, b1) < eps_x {
             return Some(ContactPair {
@@ -701,6 +726,8 @@ impl Contact {
                 dhat,
                 eps_x,
                 mu,
+                kappa,
+                objects: [oa, ob],
                 multiplicity: 1.0,
             });
         }
@@ -743,8 +770,18 @@ impl Contact {
             dhat,
             eps_x,
             mu,
+            kappa,
+            objects: [oa, ob],
             multiplicity: 1.0,
         })
+    }
+
+    /// Distance of an active pair at `x`, m.
+    fn pair_distance(p: &ContactPair, x: &[Vector3<f64>]) -> f64 {
+        let (dist, idx) = p.kind.distance();
+        let x = Self::stencil_x(&p.nodes, x);
+        let sub: Vec<Vec3<f64>> = idx[..dist.len()].iter().map(|&i| Vec3::constant(&x[i])).collect();
+        pairs::distance_sq(dist, &sub).sqrt()
     }
 
     fn stencil_x(nodes: &[u32; 4], x: &[Vector3<f64>]) -> [Vector3<f64>; 4] {
@@ -756,7 +793,6 @@ impl Contact {
     /// forces, tangents and weights from the converged state but must keep the slip origin).
     fn lag_friction(&mut self, pairs: &[ContactPair], x0: &[Vector3<f64>], x_start: &[Vector3<f64>], dt: f64) {
         let eps = self.settings.friction_stick_slide_threshold_m_s * dt;
-        let kappa = self.kappa;
         let kind = self.settings.barrier;
         self.friction_elements = pairs
             .iter()
@@ -787,7 +823,7 @@ impl Contact {
                 let rel: Vector3<f64> = (0..p.kind.len()).map(|i| x[i] * weights[i]).sum();
                 let d = rel.norm();
                 let (_, db, _) = barrier(kind, d, p.dhat);
-                let lambda = kappa * p.multiplicity * db.abs();
+                let lambda = p.kappa * p.multiplicity * db.abs();
                 (lambda > 0.0 && lambda.is_finite()).then(|| {
                     let start = Self::stencil_x(&p.nodes, x_start);
                     FrictionElement::new(p.nodes, p.kind.len(), weights, rel, &start, p.mu * lambda, eps)
@@ -1060,7 +1096,6 @@ impl EnergyTerm for Contact {
         self.version
     }
     fn energy(&self, state: &EvalState) -> f64 {
-        let kappa = self.kappa;
         let kind = self.settings.barrier;
         let barrier_energy: f64 = self
             .pairs
@@ -1069,7 +1104,7 @@ impl EnergyTerm for Contact {
                 pair_energy(
                     p,
                     &Self::stencil_x(&p.nodes, state.x).map(|q| Vec3::<f64>::constant(&q)),
-                    kappa * p.multiplicity,
+                    p.kappa * p.multiplicity,
                     kind,
                 )
             })
@@ -1089,7 +1124,7 @@ impl EnergyTerm for Contact {
             pair_derivatives(
                 p,
                 &Self::stencil_x(&p.nodes, state.x),
-                self.kappa * p.multiplicity,
+                p.kappa * p.multiplicity,
                 self.settings.barrier,
                 self.settings.hessian,
                 &mut d,
@@ -1142,6 +1177,134 @@ impl EnergyTerm for Contact {
         self.pairs = pairs;
         self.stats.active_pairs = self.pairs.len();
     }
+    fn rebalance(&mut self, state: &EvalState, gradient: &[f64]) -> bool {
+        if self.settings.stiffness.is_some() || self.pairs.is_empty() {
+            return false;
+        }
+        let distances: Vec<f64> = self.pairs.iter().map(|p| Self::pair_distance(p, state.x)).collect();
+        let kind = self.settings.barrier;
+        // Pairs of objects whose load is to be measured (IPC's gradient balance, per pair of
+        // objects): engaged (closer than 0.9 d̂) and either never measured or pressed below a
+        // tenth of d̂ (the load grew).
+        let mut keys: Vec<[u16; 2]> = Vec::new();
+        for (p, &d) in self.pairs.iter().zip(&distances) {
+            let key = sorted_objects(p.objects);
+            let engaged = d < 0.9 * p.dhat;
+            if engaged && (!self.kappa.balanced(key[0] as usize, key[1] as usize) || d < 0.1 * p.dhat) {
+                keys.push(key);
+            }
+        }
+        keys.sort_unstable();
+        keys.dedup();
+        if keys.is_empty() {
+            return false;
+        }
+        let w = self.stencil_width(state);
+        let mut blocks = vec![NO_DOF; w];
+        let mut out = vec![0.0; element_stride(w)];
+        // Kinematic nodes (prescribed obstacles) take any reaction: they are not balanced.
+        let kinematic: std::collections::HashSet<u32> = self
+            .points
+            .iter()
+            .zip(&self.point_obj)
+            .filter(|(_, &o)| self.object_masses_kg.get(o as usize).is_some_and(|&m| m == 0.0))
+            .map(|(&p, _)| p)
+            .collect();
+        // The barrier's DOF-space gradient, in total and per unit κ of each measured key.
+        let mut barrier_total: std::collections::HashMap<u32, Vector3<f64>> = Default::default();
+        let mut per_unit: Vec<std::collections::HashMap<u32, Vector3<f64>>> = vec![Default::default(); keys.len()];
+        let mut slope_sum = vec![0.0; keys.len()];
+        let mut slope_count = vec![0usize; keys.len()];
+        for (e, (p, &d)) in self.pairs.iter().zip(&distances).enumerate() {
+            if w == 4 {
+                blocks.copy_from_slice(&p.nodes);
+            } else {
+                element_blocks(&node_maps(&p.nodes, state), &mut blocks);
+            }
+            self.evaluate_element(e, state, EvalMode::ProjectedHessian, &mut out);
+            let key = keys
+                .binary_search(&sorted_objects(p.objects))
+                .ok()
+                .filter(|_| d < 0.9 * p.dhat);
+            for (k, &b) in blocks.iter().enumerate() {
+                if b == NO_DOF {
+                    continue;
+                }
+                let g = Vector3::new(out[1 + 3 * k], out[2 + 3 * k], out[3 + 3 * k]);
+                *barrier_total.entry(b).or_insert_with(Vector3::zeros) += g;
+                if kinematic.contains(&b) {
+                    continue;
+                }
+                if let Some(i) = key {
+                    *per_unit[i].entry(b).or_insert_with(Vector3::zeros) += g / p.kappa;
+                }
+            }
+            if let Some(i) = key {
+                slope_sum[i] += barrier(kind, d, p.dhat).1.abs();
+                slope_count[i] += 1;
+            }
+        }
+        let other = |b: u32| {
+            let i = 3 * b as usize;
+            Vector3::new(gradient[i], gradient[i + 1], gradient[i + 2]) - barrier_total[&b]
+        };
+        // Least squares: the stiffnesses whose barrier forces best cancel everything else.
+        let n = keys.len();
+        let mut a = nalgebra::DMatrix::<f64>::zeros(n, n);
+        let mut r = nalgebra::DVector::<f64>::zeros(n);
+        for i in 0..n {
+            for (&b, g) in &per_unit[i] {
+                r[i] -= g.dot(&other(b));
+                for j in 0..n {
+                    if let Some(h) = per_unit[j].get(&b) {
+                        a[(i, j)] += g.dot(h);
+                    }
+                }
+            }
+        }
+        let solved = a.clone().lu().solve(&r);
+        let mut changed = false;
+        // Per measured pair of objects: the stiffness at which the barrier at the current gaps
+        // carries the measured load (friction's normal forces), and the one it is set to.
+        let mut load_kappa: Vec<f64> = vec![f64::NAN; n];
+        for (i, key) in keys.iter().enumerate() {
+            let (oa, ob) = (key[0] as usize, key[1] as usize);
+            let ls = solved
+                .as_ref()
+                .map(|k| k[i])
+                .filter(|k| k.is_finite() && *k > 0.0)
+                .unwrap_or(r[i] / a[(i, i)]);
+            if !(ls > 0.0 && ls.is_finite()) {
+                continue;
+            }
+            load_kappa[i] = ls;
+            // The load `ls·Σ|b′(d)|` it carries, to be carried at half the activation distance.
+            let dhat = self.dhat(key[0], key[1]);
+            let target = ls * (slope_sum[i] / slope_count[i] as f64) / barrier(kind, 0.5 * dhat, dhat).1.abs();
+            changed |= self
+                .kappa
+                .set_from_load(oa, ob, target, self.settings.max_stiffness_factor);
+        }
+        if changed {
+            // Friction's normal forces are the measured loads: lag them from the start of the
+            // step with the stiffness that carries them at the current gaps.
+            let x0 = &state.nodes.x;
+            let mut start = self.detect(x0);
+            for p in &mut start {
+                if let Ok(i) = keys.binary_search(&sorted_objects(p.objects)) {
+                    if load_kappa[i].is_finite() {
+                        p.kappa = load_kappa[i];
+                    }
+                }
+            }
+            self.lag_friction(&start, x0, x0, state.dt);
+            for p in &mut self.pairs {
+                p.kappa = self.kappa.get(p.objects[0] as usize, p.objects[1] as usize);
+            }
+            self.stats.stiffness = self.kappa.max();
+        }
+        changed
+    }
     fn max_step_fraction(&self, from: &EvalState, to: &EvalState) -> f64 {
         if self.objects.is_empty() {
             return 1.0;
@@ -1190,23 +1353,25 @@ impl EnergyTerm for Contact {
     }
     fn after_step(&mut self, state: &EvalState) {
         let pairs = self.detect(state.x);
-        let mut min_fraction = f64::INFINITY;
         let mut min_d = f64::INFINITY;
+        let mut too_close: Vec<[u16; 2]> = Vec::new();
         for p in &pairs {
-            let (dist, idx) = p.kind.distance();
-            let x = Self::stencil_x(&p.nodes, state.x);
-            let sub: Vec<Vec3<f64>> = idx[..dist.len()].iter().map(|&i| Vec3::constant(&x[i])).collect();
-            let d = pairs::distance_sq(dist, &sub).sqrt();
+            let d = Self::pair_distance(p, state.x);
             min_d = min_d.min(d);
-            min_fraction = min_fraction.min(d / p.dhat);
+            if d < self.settings.min_distance_fraction * p.dhat {
+                too_close.push(p.objects);
+            }
         }
         self.stats.min_distance_m = min_d;
-        // IPC's adaptive stiffness: a pair this close means the barrier is too soft for the
-        // loads; stiffen it (bounded) so gaps stay resolvable.
-        if min_fraction < self.settings.min_distance_fraction {
-            self.kappa = (self.kappa * 2.0).min(self.kappa_initial * self.settings.max_stiffness_factor);
+        // IPC's adaptive stiffness, per pair of objects: a pair this close means the barrier is
+        // too soft for the load it carries; stiffen it (bounded) so gaps stay resolvable.
+        too_close.sort_unstable();
+        too_close.dedup();
+        for [a, b] in too_close {
+            self.kappa
+                .stiffen(a as usize, b as usize, self.settings.max_stiffness_factor);
         }
-        self.stats.stiffness = self.kappa;
+        self.stats.stiffness = self.kappa.max();
         let (fraction, queries) = *self.ccd_record.lock().expect("no poisoned lock");
         self.stats.min_ccd_fraction = fraction;
         self.stats.ccd_queries = queries;

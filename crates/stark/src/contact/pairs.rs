@@ -179,6 +179,10 @@ pub struct ContactPair {
     pub eps_x: f64,
     /// Friction coefficient of the pair's objects.
     pub mu: f64,
+    /// Barrier stiffness `κ` of the pair's objects, N/m.
+    pub kappa: f64,
+    /// The contact objects of the pair's two sides.
+    pub objects: [u16; 2],
     /// How many candidates (point–triangle or edge–edge) reduced to this same pair. Duplicates
     /// are merged by summing, never dropped: the energy stays the sum over candidates, which is
     /// continuous when a closest point crosses from a triangle onto its edge (dropping them would
@@ -414,6 +418,8 @@ mod tests {
                         dhat: 0.5,
                         eps_x: 1e-2,
                         mu: 0.0,
+                        kappa: 1.0,
+                        objects: [0, 0],
                         multiplicity: 1.0,
                     };
                     check(&pair, &x, barrier_kind);

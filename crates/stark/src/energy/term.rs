@@ -80,6 +80,14 @@ pub trait EnergyTerm: Send + Sync {
     /// Called before every evaluation (contact updates its active set here).
     fn prepare_evaluation(&mut self, _state: &EvalState) {}
 
+    /// Called once per step after the first assembly, with the total gradient (DOF space) at
+    /// `state`: a term may re-scale itself to balance the others (contact raises its barrier
+    /// stiffness to carry the load it is under). Returns whether it changed, so that the solver
+    /// assembles again.
+    fn rebalance(&mut self, _state: &EvalState, _gradient: &[f64]) -> bool {
+        false
+    }
+
     /// Largest fraction `α ∈ (0, 1]` of the step `state → state + Δ` that is valid (CCD).
     /// `trial` is the state at the full step.
     fn max_step_fraction(&self, _state: &EvalState, _trial: &EvalState) -> f64 {

@@ -97,21 +97,24 @@ impl RigidBodies {
             .map(|i| RigidBodyHandle { index: i as u32 })
     }
 
-    /// Add to `masses` (per node) each rigid node's share of its body's mass (for choosing the
-    /// contact stiffness).
-    pub fn add_node_masses(nodes: &NodeArrays, bodies: &BodyArrays, masses: &mut [f64]) {
+    /// Set `masses` (per node) of each rigid node to its body's effective mass at that point,
+    /// averaged over directions: `1/m = 1/M + (|r|² tr I⁻¹ − rᵀ I⁻¹ r)/3` with `r` the lever arm
+    /// from the centre of mass and `I` the world inertia tensor; the mass a contact at the point
+    /// moves (for choosing the contact stiffness, `contact::stiffness`).
+    pub fn set_node_contact_masses(nodes: &NodeArrays, bodies: &BodyArrays, masses: &mut [f64]) {
         if bodies.is_empty() {
             return;
         }
-        let mut count = vec![0usize; bodies.len()];
-        for &b in &nodes.body {
+        let inverse_inertia: Vec<Matrix3<f64>> = (0..bodies.len())
+            .map(|b| bodies.inertia_world(b).try_inverse().unwrap_or_else(Matrix3::zeros))
+            .collect();
+        for (i, (m, &b)) in masses.iter_mut().zip(&nodes.body).enumerate() {
             if b != NO_BODY {
-                count[b as usize] += 1;
-            }
-        }
-        for (m, &b) in masses.iter_mut().zip(&nodes.body) {
-            if b != NO_BODY {
-                *m += bodies.mass[b as usize] / count[b as usize] as f64;
+                let b = b as usize;
+                let r = nodes.x[i] - bodies.position[b];
+                let inv = &inverse_inertia[b];
+                let rotational = (r.norm_squared() * inv.trace() - r.dot(&(inv * r))) / 3.0;
+                *m = 1.0 / (1.0 / bodies.mass[b] + rotational.max(0.0));
             }
         }
     }

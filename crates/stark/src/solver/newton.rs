@@ -98,12 +98,14 @@ pub enum NewtonFailure {
     #[error("non-finite energy or gradient in '{0}'")]
     NonFinite(String),
     /// The line search found no acceptable step.
-    #[error("line search failed after {evaluations} evaluations (residual {residual_n:.3e} N)")]
+    #[error("line search failed after {evaluations} evaluations (residual {residual_n:.3e} N): {why}")]
     LineSearch {
         /// Energy evaluations.
         evaluations: usize,
         /// Residual, N.
         residual_n: f64,
+        /// What the trials showed.
+        why: String,
     },
 }
 
@@ -234,10 +236,14 @@ pub fn solve(
     }
 
     let mut first_residual: Option<f64> = None;
+    let mut rebalanced = false;
+    // The assembly (energy, scale) of the current iterate, when the line search already made it
+    // (a step accepted by its gradient, below).
+    let mut assembled: Option<(f64, f64)> = None;
     for iteration in 0..settings.max_iterations {
         problem.place(v, &mut ws.x, &mut ws.poses);
         let t0 = Instant::now();
-        {
+        if assembled.is_none() {
             let state = problem.state(v, &ws.x, &ws.poses);
             for t in terms.iter_mut() {
                 t.prepare_evaluation(&state);
@@ -258,7 +264,10 @@ pub fn solve(
             } else {
                 EvalMode::ExactHessian
             };
-            (energy, energy_scale) = ws.assembler.assemble(&shared, &state, n, mode, &mut ws.gradient);
+            (energy, energy_scale) = match assembled.take() {
+                Some(done) => done,
+                None => ws.assembler.assemble(&shared, &state, n, mode, &mut ws.gradient),
+            };
             report.times.evaluation_s += t1.elapsed().as_secs_f64();
             if !energy.is_finite() || ws.gradient.iter().any(|g| !g.is_finite()) {
                 let culprit = shared
@@ -266,6 +275,18 @@ pub fn solve(
                     .find(|t| !t.energy(&state).is_finite())
                     .map(|t| t.name().to_string());
                 return Err(NewtonFailure::NonFinite(culprit.unwrap_or_else(|| "gradient".into())));
+            }
+            drop(shared);
+            if iteration == 0 && !rebalanced {
+                // Once per step: terms may re-scale to balance the loads (barrier stiffness).
+                rebalanced = true;
+                let mut changed = false;
+                for t in terms.iter_mut() {
+                    changed |= t.rebalance(&state, &ws.gradient);
+                }
+                if changed {
+                    continue;
+                }
             }
             residual = norm_inf(&ws.gradient) / dt;
             report.residual_n = residual;
@@ -337,7 +358,18 @@ pub fn solve(
         report.min_step_fraction = report.min_step_fraction.min(alpha);
         // Below this the energy difference is rounding noise.
         let noise = 1e-13 * energy_scale;
+        // A decrease this small is below what the total energy can resolve (its rounding error
+        // grows with the sum of the element energies' magnitudes, and the line search's energy
+        // is summed by other code than the assembly's): there the step is judged by the force
+        // residual instead, so that any tolerance stays reachable (stiff joints, small dt).
+        let resolvable = 1e-12 * energy_scale;
+        let mode = if project {
+            EvalMode::ProjectedHessian
+        } else {
+            EvalMode::ExactHessian
+        };
         let mut accepted = false;
+        let mut trial_residual = f64::NAN;
         for _ in 0..settings.max_line_search_iterations {
             axpy_velocities(v, &ws.step, alpha, &mut ws.trial_v);
             problem.place(&ws.trial_v, &mut ws.trial_x, &mut ws.trial_poses);
@@ -360,13 +392,38 @@ pub fn solve(
                 accepted = true;
                 break;
             }
+            if e.is_finite() && -alpha * descent < resolvable && (e - energy).abs() < resolvable {
+                // Round-off regime: accept the step if it lowers the force residual. Its
+                // assembly is the next iteration's (the direction is solved already, so the
+                // gradient and matrix may be overwritten).
+                let t4 = Instant::now();
+                let shared: Vec<&dyn EnergyTerm> = terms.iter().map(|t| &**t as &dyn EnergyTerm).collect();
+                let done = ws.assembler.assemble(&shared, &trial, n, mode, &mut ws.gradient);
+                report.times.evaluation_s += t4.elapsed().as_secs_f64();
+                trial_residual = norm_inf(&ws.gradient) / dt;
+                if done.0.is_finite() && trial_residual < residual {
+                    assembled = Some(done);
+                    accepted = true;
+                    break;
+                }
+            }
             alpha *= 0.5;
         }
         report.times.line_search_s += t3.elapsed().as_secs_f64();
         if !accepted {
+            let why = if trial_residual.is_nan() {
+                format!(
+                    "no step along the Newton direction lowered the energy (its decrease was still resolvable: more than {resolvable:.1e} J)"
+                )
+            } else {
+                format!(
+                    "in the energy's round-off the residual did not decrease (last trial {trial_residual:.3e} N)"
+                )
+            };
             return Err(NewtonFailure::LineSearch {
                 evaluations: report.line_search_evaluations,
                 residual_n: residual,
+                why,
             });
         }
         std::mem::swap(v, &mut ws.trial_v);
