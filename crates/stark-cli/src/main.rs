@@ -649,6 +649,7 @@ fn bench(scenes: Vec<String>, threads: Vec<usize>, json: Option<PathBuf>) -> sta
             "spinning_box_cloth".into(),
             "twisting_cloth".into(),
             "twisting_cloth_64".into(),
+            "towel_box".into(),
         ]
     } else {
         scenes

@@ -134,6 +134,12 @@ pub fn builtin_scenes() -> Vec<BuiltinScene> {
             duration_s: 0.5,
             build: tunneling,
         },
+        BuiltinScene {
+            name: "towel_box",
+            description: "The paper's towel (5757 nodes, folded twice) on a fixed floor under a 3 kg rigid box: dense self-contact, d̂ = 3.25 mm, dt = 5 ms, residual 1e-6 N",
+            duration_s: TOWEL_BOX_DURATION_S,
+            build: towel_box,
+        },
     ]
 }
 
@@ -774,5 +780,135 @@ pub fn magnetic_deformables_n(mut settings: Settings, n: usize, name: &str) -> R
     sim.add_time_event(0.0, f64::INFINITY, move |sim, t| {
         sim.set_user_energy_param(magnet, "mz", &[magnet_height_m(t)])
     });
+    Ok(sim)
+}
+
+/// Simulated duration of `towel_box`, s (100 steps: the towel's layers settle onto each other
+/// and the floor and the contact set reaches its dense state).
+pub const TOWEL_BOX_DURATION_S: f64 = 0.5;
+
+/// Vertices and triangles of an OBJ text with `v x y z` and triangular `f a b c` lines (indices
+/// may carry `/vt/vn` parts, which are ignored).
+pub fn parse_obj_triangles(text: &str, what: &str) -> Result<(Vec<Vector3<f64>>, Vec<[usize; 3]>)> {
+    let bad = |line: usize, msg: &str| StarkError::InvalidInput(format!("{what}, line {}: {msg}", line + 1));
+    let mut vertices = Vec::new();
+    let mut triangles = Vec::new();
+    for (l, line) in text.lines().enumerate() {
+        let mut it = line.split_whitespace();
+        match it.next() {
+            Some("v") => {
+                let c: Vec<f64> = it
+                    .take(3)
+                    .map(|t| t.parse::<f64>().map_err(|_| bad(l, "bad coordinate")))
+                    .collect::<Result<_>>()?;
+                if c.len() != 3 {
+                    return Err(bad(l, "a vertex needs three coordinates"));
+                }
+                vertices.push(Vector3::new(c[0], c[1], c[2]));
+            }
+            Some("f") => {
+                let idx: Vec<usize> = it
+                    .map(|t| match t.split('/').next().and_then(|i| i.parse::<usize>().ok()) {
+                        Some(i) if i >= 1 => Ok(i - 1),
+                        _ => Err(bad(l, "bad face index")),
+                    })
+                    .collect::<Result<_>>()?;
+                if idx.len() != 3 {
+                    return Err(bad(l, "only triangles are supported"));
+                }
+                triangles.push([idx[0], idx[1], idx[2]]);
+            }
+            _ => {}
+        }
+    }
+    if let Some(t) = triangles.iter().find(|t| t.iter().any(|&i| i >= vertices.len())) {
+        return Err(StarkError::InvalidInput(format!(
+            "{what}: triangle {t:?} indexes past the {} vertices",
+            vertices.len()
+        )));
+    }
+    Ok((vertices, triangles))
+}
+
+/// The towel benchmark (issue 16): the paper's towel mesh (the original's `towel_flat.obj` as
+/// rest shape, `towel_2folds.obj` as initial positions: 5757 nodes, 11200 triangles, four layers
+/// stacked where folded) lying on a fixed floor, a 3 kg rigid box (0.35 × 0.35 × 0.07 m) resting
+/// on part of it. As in the paper's robot experiment: d̂ = 3.25 mm (contact thickness 1.625 mm
+/// per side), dt = 5 ms, residual 1e-6 N; Neo-Hookean membrane E = 1.5e4 Pa at h = 3.25 mm
+/// (E·h ≈ 50 N/m), ν = 0.3, bending 5e-6, 0.5 kg/m²; friction towel–towel 0.4, towel–floor 1.0,
+/// box–towel 0.4. The floor is a prescribed (kinematic) box whose top is `d̂` below the towel's
+/// lowest vertex, so the towel drops onto it within the first steps.
+pub fn towel_box(mut settings: Settings) -> Result<Simulation> {
+    const REST: &str = include_str!("../assets/paper-scenes/towel_flat.obj");
+    const FOLDED: &str = include_str!("../assets/paper-scenes/towel_2folds.obj");
+    let dhat = 3.25e-3;
+    let thickness = dhat / 2.0;
+    settings.name = "towel_box".into();
+    settings.time_step_s = 0.005;
+    settings.newton.residual_tolerance_n = 1e-6;
+    settings.contact.default_thickness_m = Some(thickness);
+    let (rest, triangles) = parse_obj_triangles(REST, "towel_flat.obj")?;
+    let (folded, folded_triangles) = parse_obj_triangles(FOLDED, "towel_2folds.obj")?;
+    if folded_triangles != triangles || folded.len() != rest.len() {
+        return Err(StarkError::InvalidInput(
+            "towel_2folds.obj and towel_flat.obj must share their connectivity".into(),
+        ));
+    }
+    let mut sim = Simulation::new(settings)?;
+    let h = 3.25e-3;
+    let e = 1.5e4;
+    let towel_material = SurfaceMaterial {
+        inertia: crate::deformables::InertiaParams {
+            density: 0.5,
+            damping: 0.1,
+            quasistatic: false,
+        },
+        strain: crate::deformables::TriangleStrainParams {
+            thickness_m: h,
+            youngs_modulus: e,
+            poissons_ratio: 0.3,
+            damping: 0.1 * h * e,
+            ..Default::default()
+        },
+        bending: crate::presets::Bending::Flat(crate::deformables::FlatBendingParams {
+            stiffness: 5e-6,
+            damping: 1e-7,
+        }),
+        contact_thickness_m: Some(thickness),
+    };
+    let towel = sim.add_surface("towel", &rest, &triangles, &towel_material)?;
+    // The rest shape is the flat grid; the towel starts folded.
+    for (x, p) in sim.nodes.x[towel.nodes.range()].iter_mut().zip(&folded) {
+        *x = *p;
+    }
+    let z_min = folded.iter().map(|p| p.z).fold(f64::INFINITY, f64::min);
+    let floor_size = Vector3::new(1.2, 0.8, 0.05);
+    let mut floor = meshes::box_mesh(floor_size);
+    let (x_mid, y_mid) = (0.0, 0.175);
+    for v in &mut floor.vertices {
+        *v += Vector3::new(x_mid, y_mid, z_min - dhat - floor_size.z / 2.0);
+    }
+    let floor = sim.add_prescribed_surface("floor", &floor.vertices, &floor.elements, thickness, 1e6)?;
+    let towel_contact = towel.contact.expect("towel has a contact thickness");
+    sim.contact.set_friction(towel_contact, towel_contact, 0.4)?;
+    sim.contact.set_friction(towel_contact, floor.contact, 1.0)?;
+    // The box rests on the right half of the folded towel, a gap of d̂ above its highest vertex
+    // under the box's footprint.
+    let box_size = Vector3::new(0.35, 0.35, 0.07);
+    let box_xy = [0.15, y_mid];
+    let under = folded
+        .iter()
+        .filter(|p| (p.x - box_xy[0]).abs() <= box_size.x / 2.0 && (p.y - box_xy[1]).abs() <= box_size.y / 2.0)
+        .map(|p| p.z)
+        .fold(z_min, f64::max);
+    let (_, box_contact) = rigid_box(
+        &mut sim,
+        "box",
+        3.0,
+        box_size,
+        Vector3::new(box_xy[0], box_xy[1], under + dhat + box_size.z / 2.0),
+        Some(thickness),
+    )?;
+    sim.contact.set_friction(box_contact, towel_contact, 0.4)?;
     Ok(sim)
 }

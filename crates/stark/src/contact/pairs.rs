@@ -13,7 +13,7 @@
 //! the hyper-dual oracle the tests compare against.
 
 use super::barrier::{barrier, barrier_generic, BarrierKind};
-use crate::energy::psd::project_psd;
+use crate::energy::psd::project_psd_translation_invariant;
 use crate::energy::symbolic::KernelSpec;
 use crate::energy::{points_from_flat, HyperDual, Scalar, Vec3};
 use crate::generated;
@@ -193,8 +193,8 @@ pub struct ContactPair {
 /// Energy of a pair, written generically (the oracle): `κ·m(c)·b(√s)`.
 pub fn pair_energy<S: Scalar>(pair: &ContactPair, x: &[Vec3<S>; 4], kappa: f64, kind: BarrierKind) -> S {
     let (dist, idx) = pair.kind.distance();
-    let sub: Vec<Vec3<S>> = idx[..dist.len()].iter().map(|&i| x[i]).collect();
-    let d = distance_sq(dist, &sub).sqrt();
+    let sub: [Vec3<S>; 4] = idx.map(|i| x[i]);
+    let d = distance_sq(dist, &sub[..dist.len()]).sqrt();
     let e = barrier_generic(kind, d, pair.dhat) * kappa;
     if let PairKind::EdgeEdgeMollified(_) = pair.kind {
         let r = edge_cross_sq(&x[..]) * (1.0 / pair.eps_x);
@@ -313,11 +313,12 @@ pub fn pair_derivatives(
             }
         }
         if project || hessian == PairHessian::GaussNewton {
-            project_psd(oh, 12);
+            // Distances and the mollifier's edge cross product are translation invariant.
+            project_psd_translation_invariant(oh, 4);
         }
     } else {
         if project {
-            project_psd(&mut h[..n * n], n);
+            project_psd_translation_invariant(&mut h[..n * n], m);
         }
         for i in 0..n {
             og[full(i)] = g[i];
