@@ -119,27 +119,31 @@ impl FrictionElement {
             [ml * q * u[1] * u[0], ml * (f1_over_y + q * u[1] * u[1])],
         ];
         out.value = ml * f0;
-        // ∂u_k/∂x_{i,d} = c_i T_k[d].
-        let mut a = [[[0.0f64; 3]; 4]; 2];
-        for k in 0..2 {
-            for i in 0..self.len {
-                for d in 0..3 {
-                    a[k][i][d] = self.weights[i] * self.basis[k][d];
+        // ∂u_k/∂x_{i,d} = c_i T_k[d]: the gradient is c_i (T g_u) and the Hessian's block (i, j)
+        // is c_i c_j (T H_u Tᵀ), one 3×3 matrix for all blocks.
+        let t = &self.basis;
+        let gx: [f64; 3] = std::array::from_fn(|d| t[0][d] * gu[0] + t[1][d] * gu[1]);
+        let m: [[f64; 3]; 3] = std::array::from_fn(|d| {
+            std::array::from_fn(|e| {
+                let mut h = 0.0;
+                for k in 0..2 {
+                    for l in 0..2 {
+                        h += t[k][d] * hu[k][l] * t[l][e];
+                    }
                 }
-            }
-        }
+                h
+            })
+        });
+        let c: [f64; 4] = std::array::from_fn(|i| if i < self.len { self.weights[i] } else { 0.0 });
         for i in 0..4 {
             for d in 0..3 {
-                out.grad[i][d] = a[0][i][d] * gu[0] + a[1][i][d] * gu[1];
-                for j in 0..4 {
+                out.grad[i][d] = c[i] * gx[d];
+            }
+            for j in 0..4 {
+                let cc = c[i] * c[j];
+                for d in 0..3 {
                     for e in 0..3 {
-                        let mut h = 0.0;
-                        for k in 0..2 {
-                            for l in 0..2 {
-                                h += a[k][i][d] * hu[k][l] * a[l][j][e];
-                            }
-                        }
-                        out.hess[i][d][j][e] = h;
+                        out.hess[i][d][j][e] = cc * m[d][e];
                     }
                 }
             }

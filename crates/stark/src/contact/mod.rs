@@ -955,6 +955,47 @@ fn write_dofs(d: &HyperDual<4>, dt: f64, out: &mut [f64]) {
     }
 }
 
+/// [`write_dofs`] for a stencil of deformable (`Free`) and absent (`Fixed`) nodes in the layout of
+/// [`element_stride`]`(width)` with the blocks of `element_blocks` (the free nodes in order).
+fn write_free_dofs(d: &HyperDual<4>, maps: &[NodeMap; 4], dt: f64, out: &mut [f64]) {
+    let width = (1..=8)
+        .find(|&w| element_stride(w) == out.len())
+        .expect("an element stride");
+    let mut slot = [usize::MAX; 4];
+    let mut m = 0;
+    for (a, map) in maps.iter().enumerate() {
+        if matches!(map, NodeMap::Free { .. }) {
+            slot[a] = m;
+            m += 1;
+        }
+    }
+    out.iter_mut().for_each(|o| *o = 0.0);
+    out[0] = d.value;
+    let dt2 = dt * dt;
+    let base = 1 + 3 * width;
+    for a in 0..4 {
+        let sa = slot[a];
+        if sa == usize::MAX {
+            continue;
+        }
+        for i in 0..3 {
+            out[1 + 3 * sa + i] = dt * d.grad[a][i];
+        }
+        for b in 0..4 {
+            let sb = slot[b];
+            if sb == usize::MAX {
+                continue;
+            }
+            let blk = &mut out[base + 9 * (sa * width + sb)..base + 9 * (sa * width + sb) + 9];
+            for i in 0..3 {
+                for j in 0..3 {
+                    blk[3 * i + j] = dt2 * d.hess[a][i][b][j];
+                }
+            }
+        }
+    }
+}
+
 impl Contact {
     /// Whether any contact object is a rigid body's mesh.
     fn has_rigid_objects(&self, state: &EvalState) -> bool {
@@ -1141,6 +1182,13 @@ impl EnergyTerm for Contact {
             } else {
                 self.friction_elements[e - self.pairs.len()].nodes
             };
+            let maps = node_maps(&nodes, state);
+            if maps.iter().all(|m| matches!(m, NodeMap::Free { .. } | NodeMap::Fixed)) {
+                // No rigid node (e.g. towel–towel pairs in a scene with bodies): the map is
+                // `dt·I` per node, written straight into the wider layout.
+                write_free_dofs(&d, &maps, state.dt, out);
+                return;
+            }
             // Through the kinematic map; the position-space Hessian is already positive
             // semi-definite, the rotation's second-order term may not be.
             let projection = if self.settings.hessian == PairHessian::Exact {
@@ -1148,7 +1196,7 @@ impl EnergyTerm for Contact {
             } else {
                 MapProjection::SecondOrderOnly
             };
-            map_element(&node_maps(&nodes, state), &d, state.dt, 5, projection, out);
+            map_element(&maps, &d, state.dt, 5, projection, out);
         }
     }
     fn before_step(&mut self, state: &EvalState) {

@@ -416,9 +416,7 @@ pub fn solve(
                     "no step along the Newton direction lowered the energy (its decrease was still resolvable: more than {resolvable:.1e} J)"
                 )
             } else {
-                format!(
-                    "in the energy's round-off the residual did not decrease (last trial {trial_residual:.3e} N)"
-                )
+                format!("in the energy's round-off the residual did not decrease (last trial {trial_residual:.3e} N)")
             };
             return Err(NewtonFailure::LineSearch {
                 evaluations: report.line_search_evaluations,
