@@ -138,7 +138,10 @@ pub fn project_psd_translation_invariant(h: &mut [f64], m: usize) -> bool {
             }
         }
     }
-    if !project_psd(&mut hr[..r * r], r) {
+    // Barrier Hessians `κ(b''∇d∇dᵀ + b'∇²d)` are almost always indefinite (the rank-one normal
+    // term cannot cover the curvature's negative directions), so the definiteness test would
+    // be wasted: straight to the eigen-decomposition.
+    if !clamp_negative_eigenvalues(&mut hr[..r * r], r) {
         return false;
     }
     // Back: H = Qᵀ Hr Q.
@@ -174,21 +177,39 @@ pub fn project_psd(h: &mut [f64], n: usize) -> bool {
     if is_positive_semidefinite(h, n) {
         return false;
     }
+    clamp_negative_eigenvalues(h, n)
+}
+
+/// [`project_psd`] without the definiteness test first.
+fn clamp_negative_eigenvalues(h: &mut [f64], n: usize) -> bool {
+    // Contact and element Hessians are at most 12 wide: a small buffer to clear.
+    if n <= 12 {
+        clamp_with::<144>(h, n)
+    } else {
+        clamp_with::<{ MAX_DIM * MAX_DIM }>(h, n)
+    }
+}
+
+fn clamp_with<const CAP: usize>(h: &mut [f64], n: usize) -> bool {
     let mut w = [0.0f64; MAX_DIM];
-    let mut v = [0.0f64; MAX_DIM * MAX_DIM];
+    let mut v = [0.0f64; CAP];
     symmetric_eigen(h, n, &mut w, &mut v[..n * n]);
     if w[..n].iter().all(|&x| x >= 0.0) {
         return false;
     }
-    for i in 0..n {
-        for j in 0..n {
-            let mut s = 0.0;
-            for k in 0..n {
-                if w[k] > 0.0 {
-                    s += v[i * n + k] * w[k] * v[j * n + k];
-                }
+    // H₊ = H − Σ_{λ<0} λ v vᵀ: the few negative eigenpairs are cheaper to remove than the
+    // positive ones are to sum.
+    for k in (0..n).filter(|&k| w[k] < 0.0) {
+        for i in 0..n {
+            let a = w[k] * v[i * n + k];
+            for j in i..n {
+                h[i * n + j] -= a * v[j * n + k];
             }
-            h[i * n + j] = s;
+        }
+    }
+    for i in 0..n {
+        for j in 0..i {
+            h[i * n + j] = h[j * n + i];
         }
     }
     true
