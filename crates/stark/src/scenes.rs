@@ -790,7 +790,7 @@ pub const TOWEL_BOX_DURATION_S: f64 = 0.05;
 
 /// Vertices and triangles of an OBJ text with `v x y z` and triangular `f a b c` lines (indices
 /// may carry `/vt/vn` parts, which are ignored).
-pub fn parse_obj_triangles(text: &str, what: &str) -> Result<(Vec<Vector3<f64>>, Vec<[usize; 3]>)> {
+pub fn parse_obj_triangles(text: &str, what: &str) -> Result<meshes::Mesh<3>> {
     let bad = |line: usize, msg: &str| StarkError::InvalidInput(format!("{what}, line {}: {msg}", line + 1));
     let mut vertices = Vec::new();
     let mut triangles = Vec::new();
@@ -828,7 +828,10 @@ pub fn parse_obj_triangles(text: &str, what: &str) -> Result<(Vec<Vector3<f64>>,
             vertices.len()
         )));
     }
-    Ok((vertices, triangles))
+    Ok(meshes::Mesh {
+        vertices,
+        elements: triangles,
+    })
 }
 
 /// The towel benchmark (issue 16): the paper's towel mesh (the original's `towel_flat.obj` as
@@ -848,8 +851,14 @@ pub fn towel_box(mut settings: Settings) -> Result<Simulation> {
     settings.time_step_s = 0.005;
     settings.newton.residual_tolerance_n = 1e-6;
     settings.contact.default_thickness_m = Some(thickness);
-    let (rest, triangles) = parse_obj_triangles(REST, "towel_flat.obj")?;
-    let (folded, folded_triangles) = parse_obj_triangles(FOLDED, "towel_2folds.obj")?;
+    let meshes::Mesh {
+        vertices: rest,
+        elements: triangles,
+    } = parse_obj_triangles(REST, "towel_flat.obj")?;
+    let meshes::Mesh {
+        vertices: folded,
+        elements: folded_triangles,
+    } = parse_obj_triangles(FOLDED, "towel_2folds.obj")?;
     if folded_triangles != triangles || folded.len() != rest.len() {
         return Err(StarkError::InvalidInput(
             "towel_2folds.obj and towel_flat.obj must share their connectivity".into(),
@@ -912,4 +921,41 @@ pub fn towel_box(mut settings: Settings) -> Result<Simulation> {
     )?;
     sim.contact.set_friction(box_contact, towel_contact, 0.4)?;
     Ok(sim)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn towel_box_builds_from_the_shipped_meshes_and_takes_a_step() {
+        let mut settings = Settings::default();
+        settings.output.frames = false;
+        settings.output.step_log = false;
+        settings.threads = 1;
+        let mut sim = towel_box(settings).unwrap();
+        let towel = sim.deformables.set_by_label("towel").unwrap();
+        assert_eq!(towel.len, 5757);
+        // Starts folded (four layers up to 46 mm), not on its flat rest shape.
+        let top = sim.positions(towel).iter().map(|p| p.z).fold(f64::MIN, f64::max);
+        assert!((top - 0.0457).abs() < 1e-3, "{top}");
+        sim.step().unwrap();
+        assert!(sim.positions(towel).iter().all(|p| p.iter().all(|c| c.is_finite())));
+    }
+
+    #[test]
+    fn bad_obj_text_gives_clear_errors() {
+        let ok = parse_obj_triangles("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2/5/7 3\n", "t").unwrap();
+        assert_eq!(ok.elements, vec![[0, 1, 2]]);
+        for (text, says) in [
+            ("v 0 0\n", "three coordinates"),
+            ("v 0 0 x\n", "bad coordinate"),
+            ("v 0 0 0\nf 1 2 3 4\n", "only triangles"),
+            ("v 0 0 0\nf 0 1 1\n", "bad face index"),
+            ("v 0 0 0\nf 1 1 2\n", "indexes past"),
+        ] {
+            let e = parse_obj_triangles(text, "t").unwrap_err().to_string();
+            assert!(e.contains(says), "{text:?}: {e}");
+        }
+    }
 }

@@ -113,28 +113,31 @@ pub fn project_psd_translation_invariant(h: &mut [f64], m: usize) -> bool {
     let n = 3 * m;
     let r = n - 3;
     let k = helmert(m);
-    // Reduced matrix, 3×3 block (a, b) = Σ_pq K[a][p] K[b][q] H[p][q].
-    let mut t = [0.0f64; 9 * 12]; // (Q H): r × n
+    // Reduced matrix, 3×3 block (a, b) = Σ_pq K[a][p] K[b][q] H[p][q]; row `a` of the Helmert
+    // basis has `a + 2` nonzeros. Innermost loops run over contiguous rows.
+    let mut t = [0.0f64; 9 * 12]; // Q H: r × n
     for a in 0..m - 1 {
-        for i in 0..3 {
-            for col in 0..n {
-                let mut acc = 0.0;
-                for p in 0..m {
-                    acc += k[a][p] * h[(3 * p + i) * n + col];
+        for p in 0..a + 2 {
+            let c = k[a][p];
+            for i in 0..3 {
+                let src = &h[(3 * p + i) * n..(3 * p + i + 1) * n];
+                let dst = &mut t[(3 * a + i) * n..(3 * a + i + 1) * n];
+                for (d, s) in dst.iter_mut().zip(src) {
+                    *d += c * s;
                 }
-                t[(3 * a + i) * n + col] = acc;
             }
         }
     }
-    let mut hr = [0.0f64; 81];
+    let mut hr = [0.0f64; 81]; // Q H Qᵀ: r × r
     for row in 0..r {
+        let src = &t[row * n..(row + 1) * n];
+        let dst = &mut hr[row * r..(row + 1) * r];
         for b in 0..m - 1 {
-            for j in 0..3 {
-                let mut acc = 0.0;
-                for q in 0..m {
-                    acc += t[row * n + 3 * q + j] * k[b][q];
+            for q in 0..b + 2 {
+                let c = k[b][q];
+                for j in 0..3 {
+                    dst[3 * b + j] += c * src[3 * q + j];
                 }
-                hr[row * r + 3 * b + j] = acc;
             }
         }
     }
@@ -145,26 +148,29 @@ pub fn project_psd_translation_invariant(h: &mut [f64], m: usize) -> bool {
         return false;
     }
     // Back: H = Qᵀ Hr Q.
-    let mut u = [0.0f64; 12 * 9]; // (Qᵀ Hr): n × r
-    for p in 0..m {
-        for i in 0..3 {
-            for col in 0..r {
-                let mut acc = 0.0;
-                for a in 0..m - 1 {
-                    acc += k[a][p] * hr[(3 * a + i) * r + col];
+    let mut u = [0.0f64; 12 * 9]; // Qᵀ Hr: n × r
+    for a in 0..m - 1 {
+        for p in 0..a + 2 {
+            let c = k[a][p];
+            for i in 0..3 {
+                let src = &hr[(3 * a + i) * r..(3 * a + i + 1) * r];
+                let dst = &mut u[(3 * p + i) * r..(3 * p + i + 1) * r];
+                for (d, s) in dst.iter_mut().zip(src) {
+                    *d += c * s;
                 }
-                u[(3 * p + i) * r + col] = acc;
             }
         }
     }
     for row in 0..n {
-        for q in 0..m {
-            for j in 0..3 {
-                let mut acc = 0.0;
-                for b in 0..m - 1 {
-                    acc += u[row * r + 3 * b + j] * k[b][q];
+        let src = &u[row * r..(row + 1) * r];
+        let dst = &mut h[row * n..(row + 1) * n];
+        dst.iter_mut().for_each(|v| *v = 0.0);
+        for b in 0..m - 1 {
+            for q in 0..b + 2 {
+                let c = k[b][q];
+                for j in 0..3 {
+                    dst[3 * q + j] += c * src[3 * b + j];
                 }
-                h[row * n + 3 * q + j] = acc;
             }
         }
     }
