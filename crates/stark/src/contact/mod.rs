@@ -1203,7 +1203,7 @@ impl EnergyTerm for Contact {
         let mut blocks = vec![NO_DOF; w];
         let mut out = vec![0.0; element_stride(w)];
         // Kinematic nodes (prescribed obstacles) take any reaction: they are not balanced.
-        let kinematic: std::collections::HashSet<u32> = self
+        let kinematic: std::collections::BTreeSet<u32> = self
             .points
             .iter()
             .zip(&self.point_obj)
@@ -1211,8 +1211,8 @@ impl EnergyTerm for Contact {
             .map(|(&p, _)| p)
             .collect();
         // The barrier's DOF-space gradient, in total and per unit κ of each measured key.
-        let mut barrier_total: std::collections::HashMap<u32, Vector3<f64>> = Default::default();
-        let mut per_unit: Vec<std::collections::HashMap<u32, Vector3<f64>>> = vec![Default::default(); keys.len()];
+        let mut barrier_total: std::collections::BTreeMap<u32, Vector3<f64>> = Default::default();
+        let mut per_unit: Vec<std::collections::BTreeMap<u32, Vector3<f64>>> = vec![Default::default(); keys.len()];
         let mut slope_sum = vec![0.0; keys.len()];
         let mut slope_count = vec![0usize; keys.len()];
         for (e, (p, &d)) in self.pairs.iter().zip(&distances).enumerate() {
