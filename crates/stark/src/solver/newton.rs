@@ -28,6 +28,10 @@ pub enum ConvergedBy {
     Residual,
     /// The Newton step fell below `step_tolerance_m_s`.
     Step,
+    /// The force residual is above `residual_tolerance_n` but within the rounding error of the
+    /// forces (positions are known to machine precision times their magnitude, which moves each
+    /// force by the stiffness times that much), and no step lowered it further.
+    Rounding,
 }
 
 /// Wall time spent per phase, s.
@@ -156,6 +160,24 @@ impl StepProblem<'_> {
     fn place(&self, v: &[Vector3<f64>], x: &mut Vec<Vector3<f64>>, poses: &mut Vec<BodyPose>) {
         apply_kinematic_map(self.nodes, self.bodies, v, self.dt, x, poses);
     }
+}
+
+/// The force residual (N) that rounding alone can leave: positions are known to about
+/// `1e-14·extent_m` (machine precision times their magnitude, a few operations deep), which moves
+/// the gradient (DOF space) by the matrix (`∂²E/∂v²`, so the position error divided by dt) times
+/// that much, and the residual is the gradient over dt. Takes the largest absolute row sum.
+fn residual_rounding_floor(matrix: &crate::solver::linear::BlockSparseMatrix, extent_m: f64, dt: f64) -> f64 {
+    let mut row_max = 0.0f64;
+    for r in 0..matrix.n_blocks {
+        let mut sums = [0.0f64; 3];
+        for b in &matrix.values[matrix.row_start[r]..matrix.row_start[r + 1]] {
+            for (i, sum) in sums.iter_mut().enumerate() {
+                *sum += b[3 * i].abs() + b[3 * i + 1].abs() + b[3 * i + 2].abs();
+            }
+        }
+        row_max = sums.iter().copied().fold(row_max, f64::max);
+    }
+    1e-14 * extent_m * row_max / (dt * dt)
 }
 
 fn total_energy(terms: &[&mut dyn EnergyTerm], state: &EvalState) -> f64 {
@@ -394,11 +416,16 @@ pub fn solve(
             let e = total_energy(terms, &trial);
             report.line_search_evaluations += 1;
             closest = closest.min((e - energy).abs());
-            if e.is_finite() && e <= energy + settings.armijo * alpha * descent + noise {
+            // The expected decrease is below the energy's rounding error: the energy cannot
+            // tell a better state from a worse one (accepting "no increase beyond the noise"
+            // lets the iterate wander: by ~1e-9 m along a stiff barrier, i.e. 1e-4 N).
+            let unresolvable = -alpha * descent < resolvable;
+            let armijo = e <= energy + settings.armijo * alpha * descent + noise;
+            if e.is_finite() && armijo && (!unresolvable || e < energy - resolvable) {
                 accepted = true;
                 break;
             }
-            if e.is_finite() && -alpha * descent < resolvable && (e - energy).abs() < resolvable {
+            if e.is_finite() && unresolvable && e - energy < resolvable {
                 // Round-off regime: accept the step if it lowers the force residual. Its
                 // assembly is the next iteration's (the direction is solved already, so the
                 // gradient and matrix may be overwritten).
@@ -417,13 +444,21 @@ pub fn solve(
         }
         report.times.line_search_s += t3.elapsed().as_secs_f64();
         if !accepted {
+            let floor_n = residual_rounding_floor(&ws.assembler.matrix, extent_m, dt);
+            if residual < floor_n {
+                report.converged_by = ConvergedBy::Rounding;
+                return Ok(report);
+            }
             let why = if trial_residual.is_nan() {
                 format!(
                     "no step along the Newton direction lowered the energy ({closest:.1e} J from it at best, \
                      more than its rounding error {resolvable:.1e} J: the direction is not a descent direction)"
                 )
             } else {
-                format!("in the energy's round-off the residual did not decrease (last trial {trial_residual:.3e} N)")
+                format!(
+                    "in the energy's rounding error the residual did not decrease (last trial {trial_residual:.3e} N), \
+                     and it is above the forces' rounding error {floor_n:.1e} N"
+                )
             };
             return Err(NewtonFailure::LineSearch {
                 evaluations: report.line_search_evaluations,
