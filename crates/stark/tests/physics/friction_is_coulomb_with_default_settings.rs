@@ -267,9 +267,14 @@ fn stiff_user_barrier_with_a_box_starting_inside_dhat() {
     }
     let z = sim.body_position(h.body).z - 0.5 * size.z;
     let v = sim.body_velocity(h.body).norm();
+    let summary = sim.summary();
     println!(
-        "κ = 1e7 N/m from 0.2 mm inside d̂: at 2 s gap {:.4} mm, speed {v:.2e} m/s, {failed} failed attempts",
-        1e3 * z
+        "κ = 1e7 N/m from 0.2 mm inside d̂: at 2 s gap {:.4} mm, speed {v:.2e} m/s, {failed} failed attempts; \
+         {} of {} steps ended at the forces' rounding error (largest residual {:.1e} N)",
+        1e3 * z,
+        summary.steps_at_rounding_floor,
+        summary.steps,
+        summary.max_residual_n
     );
     assert!(z > 0.0 && z < 2.0 * THICKNESS_M, "gap {z} m");
     assert!(v < 1e-3, "still moving at {v} m/s");
