@@ -58,7 +58,9 @@ pub struct ContactSettings {
     /// Upper bound of the adaptive `κ` relative to its initial value (default: 1e8).
     pub max_stiffness_factor: f64,
     /// Relative speed below which friction sticks (the smoothing `ε_v`), m/s (default: 1e-4: a
-    /// body held below its friction angle creeps at most this fast).
+    /// body held below its friction limit creeps slower than this, and a grasp slips within a
+    /// few percent of μN; 1e-3 costs fewer Newton iterations on cloth, see BENCHMARKS.md, but
+    /// lets force-limited jaws slip early, at 0.85 μN).
     pub friction_stick_slide_threshold_m_s: f64,
     /// Friction solves per step: 1 lags normal forces and tangents once from the start of the
     /// step; more re-lag them from the converged state and solve again (default: 1).
