@@ -354,8 +354,8 @@ fn print_summary(s: &RunSummary, out: &std::path::Path) {
         s.newton_iterations, s.newton_iterations_per_step, s.cg_iterations
     );
     println!(
-        "largest residual      {:.3e} N ({} steps ended by the step-size criterion)",
-        s.max_residual_n, s.steps_converged_by_step_size
+        "largest residual      {:.3e} N ({} steps ended by the step-size criterion, {} at the forces' rounding error)",
+        s.max_residual_n, s.steps_converged_by_step_size, s.steps_at_rounding_floor
     );
     println!(
         "wall time             {:.3} s ({:.3} s per simulated second)",

@@ -259,13 +259,13 @@ mirror! {
         default_thickness_m: Option<f64>,
         /// Barrier function: "log" (IPC, infinite at contact) or "cubic" (the original Stark's) (default: "log").
         barrier: Choice<stark::contact::BarrierKind>,
-        /// Barrier stiffness κ, N/m; None chooses m̄/dt² (default: None).
+        /// Barrier stiffness κ of every pair, N/m; None chooses one per pair of objects from their masses, dt and gravity (default: None).
         stiffness: Option<f64>,
         /// κ doubles after a step in which a pair came closer than this fraction of its d̂ (default: 1e-3).
         min_distance_fraction: f64,
         /// Upper bound of the adaptive κ relative to its initial value (default: 1e8).
         max_stiffness_factor: f64,
-        /// Relative speed below which friction sticks, m/s (default: 0.01).
+        /// Relative speed below which friction sticks, m/s: a held body creeps slower than this (default: 1e-4).
         friction_stick_slide_threshold_m_s: f64,
         /// Friction solves per step (default: 1).
         friction_iterations: usize,

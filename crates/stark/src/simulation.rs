@@ -91,6 +91,10 @@ pub struct RunSummary {
     pub max_residual_n: f64,
     /// Steps that ended by the step-size criterion rather than the residual.
     pub steps_converged_by_step_size: u64,
+    /// Steps that ended above the residual tolerance but within the forces' rounding error
+    /// ([`ConvergedBy::Rounding`]).
+    #[serde(default)]
+    pub steps_at_rounding_floor: u64,
     /// Wall time, s.
     pub wall_time_s: f64,
     /// Wall time per simulated second.
@@ -664,8 +668,10 @@ impl Simulation {
         s.newton_iterations += r.total_newton_iterations as u64;
         s.cg_iterations += r.cg_iterations as u64;
         s.max_residual_n = s.max_residual_n.max(r.residual_n);
-        if r.converged_by == ConvergedBy::Step {
-            s.steps_converged_by_step_size += 1;
+        match r.converged_by {
+            ConvergedBy::Step => s.steps_converged_by_step_size += 1,
+            ConvergedBy::Rounding => s.steps_at_rounding_floor += 1,
+            ConvergedBy::Residual => {}
         }
         s.wall_time_s += r.wall_time_s;
         s.times.add(&r.times);

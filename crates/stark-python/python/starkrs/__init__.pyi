@@ -145,13 +145,13 @@ class ContactSettings:
     barrier: Literal["log", "cubic"]
     """Barrier function: "log" (IPC, infinite at contact) or "cubic" (the original Stark's) (default: "log")."""
     stiffness: Optional[float]
-    """Barrier stiffness κ, N/m; None chooses m̄/dt² (default: None)."""
+    """Barrier stiffness κ of every pair, N/m; None chooses one per pair of objects from their masses, dt and gravity (default: None)."""
     min_distance_fraction: float
     """κ doubles after a step in which a pair came closer than this fraction of its d̂ (default: 1e-3)."""
     max_stiffness_factor: float
     """Upper bound of the adaptive κ relative to its initial value (default: 1e8)."""
     friction_stick_slide_threshold_m_s: float
-    """Relative speed below which friction sticks, m/s (default: 0.01)."""
+    """Relative speed below which friction sticks, m/s: a held body creeps slower than this (default: 1e-4)."""
     friction_iterations: int
     """Friction solves per step (default: 1)."""
     hessian: Literal["exact", "projected", "gauss_newton"]

@@ -58,7 +58,9 @@ pub struct ContactSettings {
     /// Upper bound of the adaptive `κ` relative to its initial value (default: 1e8).
     pub max_stiffness_factor: f64,
     /// Relative speed below which friction sticks (the smoothing `ε_v`), m/s (default: 1e-4: a
-    /// body held below its friction angle creeps at most this fast).
+    /// body held below its friction limit creeps slower than this, and a grasp slips within a
+    /// few percent of μN; 1e-3 costs fewer Newton iterations on cloth, see BENCHMARKS.md, but
+    /// lets force-limited jaws slip early, at 0.85 μN).
     pub friction_stick_slide_threshold_m_s: f64,
     /// Friction solves per step: 1 lags normal forces and tangents once from the start of the
     /// step; more re-lag them from the converged state and solve again (default: 1).
@@ -1251,7 +1253,7 @@ impl EnergyTerm for Contact {
         let mut blocks = vec![NO_DOF; w];
         let mut out = vec![0.0; element_stride(w)];
         // Kinematic nodes (prescribed obstacles) take any reaction: they are not balanced.
-        let kinematic: std::collections::HashSet<u32> = self
+        let kinematic: std::collections::BTreeSet<u32> = self
             .points
             .iter()
             .zip(&self.point_obj)
@@ -1259,8 +1261,8 @@ impl EnergyTerm for Contact {
             .map(|(&p, _)| p)
             .collect();
         // The barrier's DOF-space gradient, in total and per unit κ of each measured key.
-        let mut barrier_total: std::collections::HashMap<u32, Vector3<f64>> = Default::default();
-        let mut per_unit: Vec<std::collections::HashMap<u32, Vector3<f64>>> = vec![Default::default(); keys.len()];
+        let mut barrier_total: std::collections::BTreeMap<u32, Vector3<f64>> = Default::default();
+        let mut per_unit: Vec<std::collections::BTreeMap<u32, Vector3<f64>>> = vec![Default::default(); keys.len()];
         let mut slope_sum = vec![0.0; keys.len()];
         let mut slope_count = vec![0usize; keys.len()];
         for (e, (p, &d)) in self.pairs.iter().zip(&distances).enumerate() {

@@ -9,7 +9,7 @@ use super::linear::block_sparse::{dot, norm_inf};
 use super::linear::cholesky::CholeskySolver;
 use super::linear::pcg;
 use super::settings::{LinearSolver, NewtonSettings, Projection};
-use crate::energy::assembly::Assembler;
+use crate::energy::assembly::{Assembled, Assembler};
 use crate::energy::kinematics::BodyPose;
 use crate::energy::{EnergyTerm, EvalMode};
 use crate::state::{apply_kinematic_map, dof_blocks, start_velocities, BodyArrays, EvalState, NodeArrays};
@@ -28,6 +28,10 @@ pub enum ConvergedBy {
     Residual,
     /// The Newton step fell below `step_tolerance_m_s`.
     Step,
+    /// The force residual is above `residual_tolerance_n` but within the rounding error of the
+    /// forces (positions are known to machine precision times their magnitude, which moves each
+    /// force by the stiffness times that much), and no step lowered it further.
+    Rounding,
 }
 
 /// Wall time spent per phase, s.
@@ -158,6 +162,24 @@ impl StepProblem<'_> {
     }
 }
 
+/// The force residual (N) that rounding alone can leave: positions are known to about
+/// `1e-14·extent_m` (machine precision times their magnitude, a few operations deep), which moves
+/// the gradient (DOF space) by the matrix (`∂²E/∂v²`, so the position error divided by dt) times
+/// that much, and the residual is the gradient over dt. Takes the largest absolute row sum.
+fn residual_rounding_floor(matrix: &crate::solver::linear::BlockSparseMatrix, extent_m: f64, dt: f64) -> f64 {
+    let mut row_max = 0.0f64;
+    for r in 0..matrix.n_blocks {
+        let mut sums = [0.0f64; 3];
+        for b in &matrix.values[matrix.row_start[r]..matrix.row_start[r + 1]] {
+            for (i, sum) in sums.iter_mut().enumerate() {
+                *sum += b[3 * i].abs() + b[3 * i + 1].abs() + b[3 * i + 2].abs();
+            }
+        }
+        row_max = sums.iter().copied().fold(row_max, f64::max);
+    }
+    1e-14 * extent_m * row_max / (dt * dt)
+}
+
 fn total_energy(terms: &[&mut dyn EnergyTerm], state: &EvalState) -> f64 {
     terms.iter().map(|t| t.energy(state)).sum()
 }
@@ -237,9 +259,9 @@ pub fn solve(
 
     let mut first_residual: Option<f64> = None;
     let mut rebalanced = false;
-    // The assembly (energy, scale) of the current iterate, when the line search already made it
-    // (a step accepted by its gradient, below).
-    let mut assembled: Option<(f64, f64)> = None;
+    // The assembly of the current iterate, when the line search already made it (a step
+    // accepted by its residual, below).
+    let mut assembled: Option<Assembled> = None;
     for iteration in 0..settings.max_iterations {
         problem.place(v, &mut ws.x, &mut ws.poses);
         let t0 = Instant::now();
@@ -253,7 +275,7 @@ pub fn solve(
         let mut descent;
         let mut residual;
         let mut energy;
-        let mut energy_scale;
+        let mut sums: Assembled;
         let mut r0;
         loop {
             let t1 = Instant::now();
@@ -264,10 +286,11 @@ pub fn solve(
             } else {
                 EvalMode::ExactHessian
             };
-            (energy, energy_scale) = match assembled.take() {
+            sums = match assembled.take() {
                 Some(done) => done,
                 None => ws.assembler.assemble(&shared, &state, n, mode, &mut ws.gradient),
             };
+            energy = sums.energy;
             report.times.evaluation_s += t1.elapsed().as_secs_f64();
             if !energy.is_finite() || ws.gradient.iter().any(|g| !g.is_finite()) {
                 let culprit = shared
@@ -357,12 +380,14 @@ pub fn solve(
         let t3 = Instant::now();
         report.min_step_fraction = report.min_step_fraction.min(alpha);
         // Below this the energy difference is rounding noise.
-        let noise = 1e-13 * energy_scale;
-        // A decrease this small is below what the total energy can resolve (its rounding error
-        // grows with the sum of the element energies' magnitudes, and the line search's energy
-        // is summed by other code than the assembly's): there the step is judged by the force
-        // residual instead, so that any tolerance stays reachable (stiff joints, small dt).
-        let resolvable = 1e-12 * energy_scale;
+        let noise = 1e-13 * sums.energy_abs;
+        // A decrease this small is below what the total energy can resolve: its rounding error
+        // grows with the element energies' magnitudes and with the element forces times the
+        // positions' rounding (|x| ε), and the line search's energy is summed by other code than
+        // the assembly's. There the step is judged by the force residual instead, so that any
+        // tolerance stays reachable (stiff joints, small dt).
+        let extent_m = ws.x.iter().map(|p| p.amax()).fold(1.0, f64::max);
+        let resolvable = 1e-12 * sums.energy_abs + 1e-14 * extent_m * sums.gradient_abs / dt;
         let mode = if project {
             EvalMode::ProjectedHessian
         } else {
@@ -370,6 +395,8 @@ pub fn solve(
         };
         let mut accepted = false;
         let mut trial_residual = f64::NAN;
+        // The trial energy closest to the current one (how far apart they stay as α → 0).
+        let mut closest = f64::INFINITY;
         for _ in 0..settings.max_line_search_iterations {
             axpy_velocities(v, &ws.step, alpha, &mut ws.trial_v);
             problem.place(&ws.trial_v, &mut ws.trial_x, &mut ws.trial_poses);
@@ -388,11 +415,17 @@ pub fn solve(
             let trial = problem.state(&ws.trial_v, &ws.trial_x, &ws.trial_poses);
             let e = total_energy(terms, &trial);
             report.line_search_evaluations += 1;
-            if e.is_finite() && e <= energy + settings.armijo * alpha * descent + noise {
+            closest = closest.min((e - energy).abs());
+            // The expected decrease is below the energy's rounding error: the energy cannot
+            // tell a better state from a worse one (accepting "no increase beyond the noise"
+            // lets the iterate wander: by ~1e-9 m along a stiff barrier, i.e. 1e-4 N).
+            let unresolvable = -alpha * descent < resolvable;
+            let armijo = e <= energy + settings.armijo * alpha * descent + noise;
+            if e.is_finite() && armijo && (!unresolvable || e < energy - resolvable) {
                 accepted = true;
                 break;
             }
-            if e.is_finite() && -alpha * descent < resolvable && (e - energy).abs() < resolvable {
+            if e.is_finite() && unresolvable && e - energy < resolvable {
                 // Round-off regime: accept the step if it lowers the force residual. Its
                 // assembly is the next iteration's (the direction is solved already, so the
                 // gradient and matrix may be overwritten).
@@ -401,7 +434,7 @@ pub fn solve(
                 let done = ws.assembler.assemble(&shared, &trial, n, mode, &mut ws.gradient);
                 report.times.evaluation_s += t4.elapsed().as_secs_f64();
                 trial_residual = norm_inf(&ws.gradient) / dt;
-                if done.0.is_finite() && trial_residual < residual {
+                if done.energy.is_finite() && trial_residual < residual {
                     assembled = Some(done);
                     accepted = true;
                     break;
@@ -411,12 +444,21 @@ pub fn solve(
         }
         report.times.line_search_s += t3.elapsed().as_secs_f64();
         if !accepted {
+            let floor_n = residual_rounding_floor(&ws.assembler.matrix, extent_m, dt);
+            if residual < floor_n {
+                report.converged_by = ConvergedBy::Rounding;
+                return Ok(report);
+            }
             let why = if trial_residual.is_nan() {
                 format!(
-                    "no step along the Newton direction lowered the energy (its decrease was still resolvable: more than {resolvable:.1e} J)"
+                    "no step along the Newton direction lowered the energy ({closest:.1e} J from it at best, \
+                     more than its rounding error {resolvable:.1e} J: the direction is not a descent direction)"
                 )
             } else {
-                format!("in the energy's round-off the residual did not decrease (last trial {trial_residual:.3e} N)")
+                format!(
+                    "in the energy's rounding error the residual did not decrease (last trial {trial_residual:.3e} N), \
+                     and it is above the forces' rounding error {floor_n:.1e} N"
+                )
             };
             return Err(NewtonFailure::LineSearch {
                 evaluations: report.line_search_evaluations,

@@ -9,6 +9,7 @@ pub mod free_fall_matches_backward_euler;
 pub mod friction_is_coulomb_with_default_settings;
 pub mod grasp_slips_at_mu_f;
 pub mod incline_friction;
+pub mod jaws_hold_below_mu_n_and_slip_at_it;
 pub mod joint_rig;
 pub mod joints_hold_their_load;
 pub mod magnet_lifts_the_cubes;

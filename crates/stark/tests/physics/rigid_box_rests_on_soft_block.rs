@@ -7,12 +7,12 @@
 //! square, its diagonal far away). A rigid 0.16 m box of 1 kg (`add_box`, turned 45° about the
 //! vertical so that its bottom face's diagonal and corners stay away from the block's top
 //! vertices, see `rigid_box_stack_rests.rs`) is dropped from 5 cm above the block (1 m/s at
-//! impact). Contact thickness 1 mm everywhere, μ = 0.5 at both interfaces (without friction the
+//! impact). Contact thickness 1 mm everywhere, μ = 0.5 at both interfaces (ε_v = 1 cm/s, below) (without friction the
 //! system has no stiffness in yaw or sideways, and the barrier's small discretisation forces, a
 //! yaw torque of ~2e-4 N·m here, spin the lid up: 0.08 rad/s after 2 s), dt = 0.01 s, 2 s,
 //! default Newton settings. Every step: exact intersection test and no inverted tet.
 //!
-//! Checks at 2 s, all at rest (lid 1.4e-8 m/s, block nodes ≤ 1e-7 m/s):
+//! Checks at 2 s, all at rest (lid 1.2e-8 m/s, block nodes ≤ 1e-7 m/s):
 //! - Weight balance: the barrier forces (`Contact::barrier_forces`) summed over the lid's mesh
 //!   nodes are (−1e-8, 5e-9, 9.8100) N against its weight 9.8100 N, and over the block's nodes
 //!   9.8100 N up (the floor carries lid + block, the lid pushes down by its weight): both within
@@ -21,8 +21,8 @@
 //!   block is in uniaxial stress `P(z) = −(m g + ρ g A (h − z))/A`; the reference shortening
 //!   integrates the laterally free, homogeneous stable Neo-Hookean response (same energy as
 //!   `deformables::tet_strain`) over the height. The middle third, away from the contact
-//!   layers: 0.9709 mm against 0.9634 mm (+0.8%; +0.5% with 6×6×6 cells; asserted 2%). The whole
-//!   block: 3.017 mm against 2.889 mm (+4.4%; linear elasticity: 2.943 mm; asserted 6%): the
+//!   layers: 0.9701 mm against 0.9634 mm (+0.7%; +0.5% with 6×6×6 cells; asserted 2%). The whole
+//!   block: 3.001 mm against 2.889 mm (+3.9%; linear elasticity: 2.943 mm; asserted 6%): the
 //!   barrier is a compliant layer whose gap depends on each vertex's load, so the lid and the
 //!   floor do not press the end faces flat, and the end layers compress more (+2.6% with 1 cell,
 //!   +3.1% with 6).
@@ -105,6 +105,12 @@ fn rigid_box_rests_on_soft_block() {
     settings.time_step_s = 0.01;
     settings.gravity_m_s2 = [0.0, 0.0, -G_M_S2];
     settings.contact.default_thickness_m = Some(THICKNESS_M);
+    // The compression is checked against faces free to expand sideways. With the default
+    // ε_v = 1e-4 m/s friction holds the block's end faces (their Poisson expansion needs less
+    // than μN), which Coulomb allows: the faces then creep toward the free state below ε_v (the
+    // lid still sank at 1.2e-5 m/s at 2 s, time constant ~6 s). A threshold of 1 cm/s lets them
+    // slide to it within the 2 s.
+    settings.contact.friction_stick_slide_threshold_m_s = 0.01;
     let mut sim = Simulation::new(settings).unwrap();
     let mut material = VolumeMaterial::soft_rubber();
     material.strain.youngs_modulus = YOUNGS_MODULUS_PA;
