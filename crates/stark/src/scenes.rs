@@ -788,52 +788,6 @@ pub fn magnetic_deformables_n(mut settings: Settings, n: usize, name: &str) -> R
 /// adapts; longer runs (`stark run --scene towel_box --duration 6`) reach the settled state.
 pub const TOWEL_BOX_DURATION_S: f64 = 0.05;
 
-/// Vertices and triangles of an OBJ text with `v x y z` and triangular `f a b c` lines (indices
-/// may carry `/vt/vn` parts, which are ignored).
-pub fn parse_obj_triangles(text: &str, what: &str) -> Result<meshes::Mesh<3>> {
-    let bad = |line: usize, msg: &str| StarkError::InvalidInput(format!("{what}, line {}: {msg}", line + 1));
-    let mut vertices = Vec::new();
-    let mut triangles = Vec::new();
-    for (l, line) in text.lines().enumerate() {
-        let mut it = line.split_whitespace();
-        match it.next() {
-            Some("v") => {
-                let c: Vec<f64> = it
-                    .take(3)
-                    .map(|t| t.parse::<f64>().map_err(|_| bad(l, "bad coordinate")))
-                    .collect::<Result<_>>()?;
-                if c.len() != 3 {
-                    return Err(bad(l, "a vertex needs three coordinates"));
-                }
-                vertices.push(Vector3::new(c[0], c[1], c[2]));
-            }
-            Some("f") => {
-                let idx: Vec<usize> = it
-                    .map(|t| match t.split('/').next().and_then(|i| i.parse::<usize>().ok()) {
-                        Some(i) if i >= 1 => Ok(i - 1),
-                        _ => Err(bad(l, "bad face index")),
-                    })
-                    .collect::<Result<_>>()?;
-                if idx.len() != 3 {
-                    return Err(bad(l, "only triangles are supported"));
-                }
-                triangles.push([idx[0], idx[1], idx[2]]);
-            }
-            _ => {}
-        }
-    }
-    if let Some(t) = triangles.iter().find(|t| t.iter().any(|&i| i >= vertices.len())) {
-        return Err(StarkError::InvalidInput(format!(
-            "{what}: triangle {t:?} indexes past the {} vertices",
-            vertices.len()
-        )));
-    }
-    Ok(meshes::Mesh {
-        vertices,
-        elements: triangles,
-    })
-}
-
 /// The towel benchmark (issue 16): the paper's towel mesh (the original's `towel_flat.obj` as
 /// rest shape, `towel_2folds.obj` as initial positions: 5757 nodes, 11200 triangles, four layers
 /// stacked where folded) lying on a fixed floor, a 3 kg rigid box (0.35 × 0.35 × 0.07 m) resting
@@ -854,11 +808,11 @@ pub fn towel_box(mut settings: Settings) -> Result<Simulation> {
     let meshes::Mesh {
         vertices: rest,
         elements: triangles,
-    } = parse_obj_triangles(REST, "towel_flat.obj")?;
+    } = crate::io::mesh_files::parse_obj(REST, "towel_flat.obj")?;
     let meshes::Mesh {
         vertices: folded,
         elements: folded_triangles,
-    } = parse_obj_triangles(FOLDED, "towel_2folds.obj")?;
+    } = crate::io::mesh_files::parse_obj(FOLDED, "towel_2folds.obj")?;
     if folded_triangles != triangles || folded.len() != rest.len() {
         return Err(StarkError::InvalidInput(
             "towel_2folds.obj and towel_flat.obj must share their connectivity".into(),
@@ -941,21 +895,5 @@ mod tests {
         assert!((top - 0.0457).abs() < 1e-3, "{top}");
         sim.step().unwrap();
         assert!(sim.positions(towel).iter().all(|p| p.iter().all(|c| c.is_finite())));
-    }
-
-    #[test]
-    fn bad_obj_text_gives_clear_errors() {
-        let ok = parse_obj_triangles("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2/5/7 3\n", "t").unwrap();
-        assert_eq!(ok.elements, vec![[0, 1, 2]]);
-        for (text, says) in [
-            ("v 0 0\n", "three coordinates"),
-            ("v 0 0 x\n", "bad coordinate"),
-            ("v 0 0 0\nf 1 2 3 4\n", "only triangles"),
-            ("v 0 0 0\nf 0 1 1\n", "bad face index"),
-            ("v 0 0 0\nf 1 1 2\n", "indexes past"),
-        ] {
-            let e = parse_obj_triangles(text, "t").unwrap_err().to_string();
-            assert!(e.contains(says), "{text:?}: {e}");
-        }
     }
 }

@@ -272,6 +272,36 @@ pub fn load_obj_shapes(path: impl AsRef<Path>) -> Result<Vec<(String, Mesh<3>)>,
         .collect())
 }
 
+/// Parses OBJ text (an asset compiled into the program) into one triangle mesh: its shapes
+/// merged in file order, polygons triangulated as fans, not welded (two meshes of the same
+/// faces, such as a rest shape and a deformed one, keep corresponding vertex numbers).
+/// `name` stands for the path in errors.
+///
+/// # Errors
+/// [`MeshFileError::Obj`].
+pub fn parse_obj(text: &str, name: &str) -> Result<Mesh<3>, MeshFileError> {
+    let options = tobj::LoadOptions {
+        triangulate: true,
+        ignore_points: true,
+        ignore_lines: true,
+        ..Default::default()
+    };
+    let mut reader = io::BufReader::new(text.as_bytes());
+    let (models, _materials) =
+        tobj::load_obj_buf(&mut reader, &options, |_| Ok(Default::default())).map_err(|source| MeshFileError::Obj {
+            path: PathBuf::from(name),
+            source,
+        })?;
+    let mut all = Mesh::<3>::default();
+    for model in &models {
+        let m = obj_model_mesh(model);
+        let offset = all.vertices.len();
+        all.vertices.extend(m.vertices);
+        all.elements.extend(m.elements.iter().map(|t| t.map(|i| i + offset)));
+    }
+    Ok(all)
+}
+
 /// Loads all shapes of an OBJ file merged into one triangle mesh; vertices at exactly the
 /// same position are welded (shapes that share OBJ vertices become connected again).
 ///
@@ -678,6 +708,15 @@ mod tests {
         let via_dispatch = load_mesh(dir.path().join("cube.obj")).unwrap();
         assert_eq!(via_dispatch.triangles.len(), 12);
         assert!(via_dispatch.tets.is_empty());
+    }
+
+    #[test]
+    fn obj_text_parses_in_file_order_and_names_itself_in_errors() {
+        let m = parse_obj("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2/5 3 4\n", "quad.obj").unwrap();
+        assert_eq!(m.vertices.len(), 4);
+        assert_eq!(m.elements.len(), 2, "the quad is triangulated");
+        let e = parse_obj("v 0 0 x\nf 1 1 1\n", "bad.obj").unwrap_err().to_string();
+        assert!(e.contains("bad.obj"), "{e}");
     }
 
     #[test]
