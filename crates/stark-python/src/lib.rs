@@ -18,6 +18,7 @@ mod joints;
 mod meshes;
 mod params;
 mod rigid;
+mod robots;
 mod scene;
 mod simulation;
 mod sym;
@@ -38,6 +39,7 @@ fn _starkrs(m: &Bound<'_, PyModule>) -> PyResult<()> {
     rigid::register(m)?;
     simulation::register(m)?;
     joints::register(m)?;
+    robots::register(m)?;
     scene::register(m)?;
     m.add_submodule(&geometry::module(py)?)?;
     m.add_submodule(&meshes::module(py)?)?;

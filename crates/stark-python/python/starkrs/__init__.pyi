@@ -542,6 +542,23 @@ class RigidAttachmentHandle:
         """Index of the group in its model."""
 
 @final
+class Robot:
+    """A robot in a simulation: its bodies and joints by URDF name."""
+    @property
+    def name(self) -> str:
+        """Its name (its bodies and joints are labelled `<name>/<link>` and `<name>/<joint>`)."""
+    @property
+    def links(self) -> dict[str, Optional[RigidBody]]:
+        """The body of every link (links merged by fixed joints share one; None for links merged
+        into the world by a fixed base)."""
+    @property
+    def joints(self) -> dict[str, Joint]:
+        """The main joint of every URDF joint that became one (hinge, prismatic, actuator, ...)."""
+    @property
+    def extra_joints(self) -> list[Joint]:
+        """The other joints it made: limits, mimic couplings, damping, springs, fix joints."""
+
+@final
 class RigidObject:
     """A rigid body made by a preset (`add_box`, ...): the body and its collision mesh."""
     @property
@@ -1217,6 +1234,17 @@ class Simulation:
         """Target pose of a fix joint's body: centre of mass at `position_m` (m), orientation a rotation of `angle_deg` about `axis`."""
 
     # ---- Rigid-body presets, drawn meshes, collisions between bodies ----
+    def add_robot(
+        self, name: str, urdf: Union[str, os.PathLike], package_paths: Optional[list[Union[str, os.PathLike]]] = None,
+        position_m: Optional[_Vector] = None, orientation: Optional[_Rotation] = None, fixed_base: bool = False,
+        merge_fixed_joints: bool = True, visual_meshes: bool = False, contact_thickness_m: Optional[float] = None,
+        adjacent_links_collide: bool = False, self_collision: bool = True,
+        links: Optional[dict[str, dict[str, Any]]] = None, joints: Optional[dict[str, dict[str, Any]]] = None,
+    ) -> Robot:
+        """Load a robot from a URDF file: links become rigid bodies, joints hinges, sliders and
+        couplings, `<collision>` geometry collision meshes; `links` and `joints` are overrides by
+        URDF name with the fields of the scene files' `[robot.links.<link>]` and
+        `[robot.joints.<joint>]` tables."""
     def add_box(
         self, label: str, mass_kg: float, size_m: _Vector, position_m: Optional[_Vector] = None,
         orientation: Optional[_Rotation] = None, thickness_m: Optional[float] = None,
