@@ -782,8 +782,9 @@ impl Contact {
     fn pair_distance(p: &ContactPair, x: &[Vector3<f64>]) -> f64 {
         let (dist, idx) = p.kind.distance();
         let x = Self::stencil_x(&p.nodes, x);
-        let sub: Vec<Vec3<f64>> = idx[..dist.len()].iter().map(|&i| Vec3::constant(&x[i])).collect();
-        pairs::distance_sq(dist, &sub).sqrt()
+        let n = dist.len();
+        let sub: [Vec3<f64>; 4] = std::array::from_fn(|k| Vec3::constant(&x[if k < n { idx[k] } else { 0 }]));
+        pairs::distance_sq(dist, &sub[..n]).sqrt()
     }
 
     fn stencil_x(nodes: &[u32; 4], x: &[Vector3<f64>]) -> [Vector3<f64>; 4] {

@@ -52,6 +52,22 @@ fn floor(sim: &mut Simulation) -> stark::presets::ObstacleHandle {
         .unwrap()
 }
 
+/// Side lengths of the flat block, m (w/h = 4: it cannot tip below μ = 4).
+const BLOCK_SIZE_M: Vector3<f64> = Vector3::new(0.2, 0.2, 0.05);
+
+/// The rigid 1 kg block, its bottom `gap_m` above the floor (contact thickness 1 mm).
+fn rigid_block(sim: &mut Simulation, gap_m: f64) -> stark::presets::rigid::RigidHandle {
+    sim.add_box(
+        "block",
+        1.0,
+        BLOCK_SIZE_M,
+        Vector3::new(0.0, 0.0, 0.5 * BLOCK_SIZE_M.z + gap_m),
+        UnitQuaternion::identity(),
+        Some(THICKNESS_M),
+    )
+    .unwrap()
+}
+
 /// Centre of mass along x of the block.
 fn com_x(sim: &Simulation, block: Block) -> f64 {
     match block {
@@ -72,22 +88,9 @@ fn com_x(sim: &Simulation, block: Block) -> f64 {
 fn incline(block: Block, mu: f64, tan_theta: f64, duration_s: f64) -> (f64, usize) {
     let mut sim = Simulation::new(settings()).unwrap();
     let f = floor(&mut sim);
-    // A flat block (w/h = 4) cannot tip at these friction coefficients (it would above μ = 4).
-    let size = Vector3::new(0.2, 0.2, 0.05);
+    let size = BLOCK_SIZE_M;
     let c = match block {
-        Block::Rigid => {
-            let h = sim
-                .add_box(
-                    "block",
-                    1.0,
-                    size,
-                    Vector3::new(0.0, 0.0, 0.5 * size.z + THICKNESS_M),
-                    UnitQuaternion::identity(),
-                    Some(THICKNESS_M),
-                )
-                .unwrap();
-            h.mesh.contact
-        }
+        Block::Rigid => rigid_block(&mut sim, THICKNESS_M).mesh.contact,
         Block::Soft => {
             let mut m = VolumeMaterial::soft_rubber();
             m.inertia.damping = 0.0;
@@ -178,17 +181,7 @@ fn slide_to_rest(dt_s: f64) -> (f64, f64) {
     s.time_step_s = dt_s;
     let mut sim = Simulation::new(s).unwrap();
     let f = floor(&mut sim);
-    let size = Vector3::new(0.2, 0.2, 0.05);
-    let h = sim
-        .add_box(
-            "block",
-            1.0,
-            size,
-            Vector3::new(0.0, 0.0, 0.5 * size.z + THICKNESS_M),
-            UnitQuaternion::identity(),
-            Some(THICKNESS_M),
-        )
-        .unwrap();
+    let h = rigid_block(&mut sim, THICKNESS_M);
     sim.contact.set_friction(h.mesh.contact, f.contact, 0.5).unwrap();
     let mut totals = ValidityTotals::default();
     while sim.time() < 0.2 - 1e-9 {
@@ -248,17 +241,8 @@ fn stiff_user_barrier_with_a_box_starting_inside_dhat() {
     s.contact.stiffness = Some(1e7);
     let mut sim = Simulation::new(s).unwrap();
     let f = floor(&mut sim);
-    let size = Vector3::new(0.2, 0.2, 0.05);
-    let h = sim
-        .add_box(
-            "block",
-            1.0,
-            size,
-            Vector3::new(0.0, 0.0, 0.5 * size.z + 0.1 * THICKNESS_M),
-            UnitQuaternion::identity(),
-            Some(THICKNESS_M),
-        )
-        .unwrap();
+    let size = BLOCK_SIZE_M;
+    let h = rigid_block(&mut sim, 0.1 * THICKNESS_M);
     sim.contact.set_friction(h.mesh.contact, f.contact, 0.5).unwrap();
     let mut totals = ValidityTotals::default();
     let mut failed = 0;
