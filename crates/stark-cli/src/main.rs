@@ -346,6 +346,10 @@ fn print_rigid_summary(sim: &Simulation, s: &RunSummary) {
 fn print_summary(s: &RunSummary, out: &std::path::Path) {
     println!("scene                 {}", s.scene);
     println!(
+        "problem size          {} unknowns ({} nodes, {} rigid bodies)",
+        s.unknowns, s.nodes, s.rigid_bodies
+    );
+    println!(
         "simulated time        {:.4} s in {} steps ({} failed attempts, {} hardening retries)",
         s.simulated_time_s, s.steps, s.failed_steps, s.hardening_retries
     );

@@ -103,8 +103,12 @@ pub struct RunSummary {
     pub times: PhaseTimes,
     /// Frames written.
     pub frames: usize,
-    /// Number of deformable nodes.
+    /// Number of nodes (deformable nodes and rigid collision-mesh vertices).
     pub nodes: usize,
+    /// Scalar unknowns of the Newton solve: 3 per deformable node, 6 per rigid body (rigid
+    /// collision-mesh vertices follow their body and have none).
+    #[serde(default)]
+    pub unknowns: usize,
     /// Active contact pairs, averaged over the accepted steps.
     pub mean_active_pairs: f64,
     /// Most active contact pairs in an accepted step.
@@ -149,7 +153,7 @@ pub struct Simulation {
     time: f64,
     dt: f64,
     events: Vec<TimeEvent>,
-    newton: NewtonWorkspace,
+    pub(crate) newton: NewtonWorkspace,
     velocities: Vec<Vector3<f64>>,
     scratch_x: Vec<Vector3<f64>>,
     scratch_poses: Vec<BodyPose>,
@@ -682,6 +686,7 @@ impl Simulation {
             0.0
         };
         s.nodes = self.nodes.len();
+        s.unknowns = 3 * crate::state::DofMap::new(&self.nodes, &self.bodies).len();
         if let Some(c) = &r.contact {
             s.mean_active_pairs += (c.active_pairs as f64 - s.mean_active_pairs) / s.steps as f64;
             s.max_active_pairs = s.max_active_pairs.max(c.active_pairs);
@@ -837,7 +842,8 @@ impl Simulation {
         for t in self.terms_mut() {
             h.str(t.name());
             // Contact's elements are its active pairs, which change from step to step; the rigid
-            // inertia adds its pinned rigid nodes at the first step (both are hashed above).
+            // inertia's are the bodies (hashed above; left out so that older checkpoints, whose
+            // rigid inertia also held rigid nodes, still match).
             if t.name() != "contact" && t.name() != "rigid body inertia" {
                 h.u64(t.num_elements() as u64);
             }

@@ -23,7 +23,7 @@ pub struct NodeArrays {
     pub acceleration: Vec<Vector3<f64>>,
     /// The rigid body a node belongs to ([`NO_BODY`] for deformable nodes). A rigid node is a
     /// vertex of a body's collision mesh: its `rest` is its body-local position and its position
-    /// follows the body (its own DOF block is unused and pinned at zero).
+    /// follows the body (its own DOF block stays zero and is not an unknown: [`DofMap`]).
     #[serde(default)]
     pub body: Vec<u32>,
 }
@@ -223,4 +223,54 @@ pub fn start_velocities(nodes: &NodeArrays, bodies: &BodyArrays, out: &mut Vec<V
 /// Number of DOF blocks of a state: one per node, two per body.
 pub fn dof_blocks(nodes: &NodeArrays, bodies: &BodyArrays) -> usize {
     nodes.len() + 2 * bodies.len()
+}
+
+/// Which DOF blocks are unknowns of the linear system.
+///
+/// Velocities are stored per block (one per node, two per body: [`dof_blocks`]) so that energies
+/// index them by node. A rigid node (a vertex of a body's collision mesh) follows its body
+/// through the kinematic map: its own block is always zero and is not an unknown. The solver's
+/// gradient, matrix and step are over the unknowns only, in block order.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct DofMap {
+    /// The block of each unknown.
+    pub block_of_dof: Vec<u32>,
+    /// The unknown of each block ([`NO_DOF`](crate::energy::term::NO_DOF) for rigid nodes).
+    pub dof_of_block: Vec<u32>,
+}
+
+impl DofMap {
+    /// The unknowns of a state: every deformable node's block and both blocks of every body.
+    pub fn new(nodes: &NodeArrays, bodies: &BodyArrays) -> Self {
+        use crate::energy::term::NO_DOF;
+        let n_blocks = dof_blocks(nodes, bodies);
+        let mut map = DofMap {
+            block_of_dof: Vec::with_capacity(n_blocks),
+            dof_of_block: vec![NO_DOF; n_blocks],
+        };
+        let rigid = |i: usize| nodes.body.get(i).is_some_and(|&b| b != NO_BODY);
+        for block in 0..n_blocks {
+            if block < nodes.len() && rigid(block) {
+                continue;
+            }
+            map.dof_of_block[block] = map.block_of_dof.len() as u32;
+            map.block_of_dof.push(block as u32);
+        }
+        map
+    }
+
+    /// Number of unknown blocks (three scalar unknowns each).
+    pub fn len(&self) -> usize {
+        self.block_of_dof.len()
+    }
+
+    /// No unknowns.
+    pub fn is_empty(&self) -> bool {
+        self.block_of_dof.is_empty()
+    }
+
+    /// Number of DOF blocks (unknown or not).
+    pub fn n_blocks(&self) -> usize {
+        self.dof_of_block.len()
+    }
 }

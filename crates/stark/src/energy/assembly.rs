@@ -7,10 +7,13 @@
 //! so every entry is summed in the same order whatever the thread count (deterministic results).
 //! Only the upper block triangle is accumulated; the lower one is its transpose. The pattern,
 //! slot maps and colours are rebuilt only when a term's topology changes.
+//!
+//! Terms write their stencils in DOF blocks; the assembly maps them to the unknowns
+//! ([`DofMap`]), so the gradient and matrix are over the unknowns only.
 
 use super::term::{element_stride, EnergyTerm, EvalMode, NO_DOF};
 use crate::solver::linear::BlockSparseMatrix;
-use crate::state::EvalState;
+use crate::state::{DofMap, EvalState};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -37,7 +40,7 @@ struct TermLayout {
     /// The term's block pairs `(row, column)`, sorted and deduplicated.
     pairs: Vec<(u32, u32)>,
     width: usize,
-    /// DOF blocks of each element (`width` each).
+    /// Unknowns of each element (`width` each; its DOF blocks mapped through the [`DofMap`]).
     stencils: Vec<u32>,
     /// Matrix slot of each element block `(a, b)` that lies in the upper triangle (`width²`).
     slots: Vec<u32>,
@@ -83,6 +86,8 @@ pub struct Assembled {
 #[derive(Default)]
 pub struct Assembler {
     key: Option<LayoutKey>,
+    /// The map the layouts were built with.
+    dofs: DofMap,
     layouts: Vec<TermLayout>,
     /// For every stored block: `None` for the upper triangle (accumulated), or the upper block
     /// it is the transpose of.
@@ -130,7 +135,14 @@ fn slot_of(matrix: &BlockSparseMatrix, r: u32, c: u32) -> u32 {
 }
 
 impl Assembler {
-    fn ensure_layout(&mut self, terms: &[&dyn EnergyTerm], state: &EvalState, n_blocks: usize) {
+    fn ensure_layout(&mut self, terms: &[&dyn EnergyTerm], state: &EvalState, dofs: &DofMap) {
+        let n_blocks = dofs.len();
+        if self.dofs != *dofs {
+            // Nodes or bodies were added: every stencil moves.
+            self.dofs = dofs.clone();
+            self.key = None;
+            self.layouts.clear();
+        }
         let key: LayoutKey = (
             terms
                 .iter()
@@ -158,6 +170,17 @@ impl Assembler {
             let m = term_key.2;
             let mut stencils = vec![NO_DOF; t.num_elements() * m];
             t.write_stencils(state, &mut stencils);
+            for s in stencils.iter_mut().filter(|s| **s != NO_DOF) {
+                let dof = dofs.dof_of_block[*s as usize];
+                // A block that is not an unknown (a rigid node's) has no place in the system:
+                // terms reach rigid nodes through their body's blocks.
+                assert!(
+                    dof != NO_DOF,
+                    "'{}' writes DOF block {s}, which is not an unknown",
+                    t.name()
+                );
+                *s = dof;
+            }
             let mut pairs: Vec<(u32, u32)> = Vec::new();
             for st in stencils.chunks_exact(m.max(1)) {
                 for &r in st.iter().filter(|&&r| r != NO_DOF) {
@@ -242,17 +265,17 @@ impl Assembler {
     }
 
     /// Evaluate all terms at `state`: returns the total energy and the scales of its rounding
-    /// error (see [`Assembled`]), writes the gradient (length `3·n_blocks`) and assembles the
-    /// Hessian into [`Assembler::matrix`].
+    /// error (see [`Assembled`]), writes the gradient over the unknowns (length `3·dofs.len()`)
+    /// and assembles the Hessian into [`Assembler::matrix`].
     pub fn assemble(
         &mut self,
         terms: &[&dyn EnergyTerm],
         state: &EvalState,
-        n_blocks: usize,
+        dofs: &DofMap,
         mode: EvalMode,
         gradient: &mut [f64],
     ) -> Assembled {
-        self.ensure_layout(terms, state, n_blocks);
+        self.ensure_layout(terms, state, dofs);
         let t0 = std::time::Instant::now();
         gradient.iter_mut().for_each(|g| *g = 0.0);
         self.matrix.values.iter_mut().for_each(|v| *v = [0.0; 9]);

@@ -12,9 +12,9 @@
 //! second order in dt per step). Both `Jp` and `ω*` are lagged at the start of each step.
 
 use crate::energy::kinematics::integrate_orientation;
-use crate::energy::term::{element_stride, EnergyTerm, EvalMode, NO_DOF};
+use crate::energy::term::{element_stride, EnergyTerm, EvalMode};
 use crate::error::{check_param, Result};
-use crate::state::{angular_block, linear_block, BodyArrays, EvalState, NO_BODY};
+use crate::state::{angular_block, linear_block, BodyArrays, EvalState};
 use nalgebra::{Matrix3, Vector3};
 
 /// Per-body inertia parameters.
@@ -49,16 +49,13 @@ impl RigidBodyParams {
     }
 }
 
-/// The inertia term of all rigid bodies, plus the pinned (unused) DOF blocks of rigid nodes.
+/// The inertia term of all rigid bodies.
 #[derive(Default)]
 pub struct RigidInertia {
     /// Parameters per body.
     pub params: Vec<RigidBodyParams>,
     /// Lagged per body: predicted world inertia `Jp` and the momentum-conserving target `ω*`.
     lagged: Vec<(Matrix3<f64>, Vector3<f64>)>,
-    /// Nodes that belong to bodies (their own DOF block is pinned at zero).
-    pinned: Vec<u32>,
-    version: u64,
 }
 
 impl RigidInertia {
@@ -117,77 +114,42 @@ impl EnergyTerm for RigidInertia {
         crate::energy::restore_vec(&mut self.params, crate::energy::decode_state(bytes)?, "bodies")
     }
     fn num_elements(&self) -> usize {
-        self.params.len() + self.pinned.len()
+        self.params.len()
     }
     fn stencil_width(&self, _state: &EvalState) -> usize {
         2
     }
     fn write_stencils(&self, state: &EvalState, out: &mut [u32]) {
         let n = state.n_nodes();
-        let nb = self.params.len();
         for (e, o) in out.chunks_exact_mut(2).enumerate() {
-            if e < nb {
-                o[0] = linear_block(n, e);
-                o[1] = angular_block(n, e);
-            } else {
-                o[0] = self.pinned[e - nb];
-                o[1] = NO_DOF;
-            }
+            o[0] = linear_block(n, e);
+            o[1] = angular_block(n, e);
         }
     }
-    fn topology_version(&self) -> u64 {
-        self.version
-    }
     fn energy(&self, state: &EvalState) -> f64 {
-        let bodies: f64 = (0..self.params.len()).map(|b| self.body_energy(b, state).0).sum();
-        let pinned: f64 = self
-            .pinned
-            .iter()
-            .map(|&i| 0.5 * state.v[i as usize].norm_squared())
-            .sum();
-        bodies + pinned
+        (0..self.params.len()).map(|b| self.body_energy(b, state).0).sum()
     }
     fn evaluate_element(&self, e: usize, state: &EvalState, _mode: EvalMode, out: &mut [f64]) {
         debug_assert_eq!(out.len(), element_stride(2));
         out.iter_mut().for_each(|o| *o = 0.0);
-        let nb = self.params.len();
-        if e < nb {
-            let (energy, g, h) = self.body_energy(e, state);
-            out[0] = energy;
-            for a in 0..2 {
-                for i in 0..3 {
-                    out[1 + 3 * a + i] = g[a][i];
-                }
-                // Diagonal blocks (a, a) of the 2×2 block layout.
-                let base = 7 + 9 * (a * 2 + a);
-                for i in 0..3 {
-                    for j in 0..3 {
-                        out[base + 3 * i + j] = h[a][(i, j)];
-                    }
-                }
-            }
-        } else {
-            // A rigid node's own block: ½‖v‖², so it stays at zero.
-            let v = state.v[self.pinned[e - nb] as usize];
-            out[0] = 0.5 * v.norm_squared();
+        let (energy, g, h) = self.body_energy(e, state);
+        out[0] = energy;
+        for a in 0..2 {
             for i in 0..3 {
-                out[1 + i] = v[i];
+                out[1 + 3 * a + i] = g[a][i];
             }
+            // Diagonal blocks (a, a) of the 2×2 block layout.
+            let base = 7 + 9 * (a * 2 + a);
             for i in 0..3 {
-                out[7 + 4 * i] = 1.0;
+                for j in 0..3 {
+                    out[base + 3 * i + j] = h[a][(i, j)];
+                }
             }
         }
     }
     fn before_step(&mut self, state: &EvalState) {
         let bodies = state.bodies;
         self.lagged = (0..bodies.len()).map(|b| Self::lag(bodies, b, state.dt)).collect();
-        let pinned: Vec<u32> = (0..state.n_nodes() as u32)
-            .filter(|&i| state.nodes.body[i as usize] != NO_BODY)
-            .collect();
-        if pinned != self.pinned {
-            self.pinned = pinned;
-            self.version += 1;
-        }
     }
 }
 

@@ -524,6 +524,42 @@ mod tests {
     }
 
     #[test]
+    fn collision_mesh_vertices_are_not_unknowns() {
+        // A 4-node cloth and, 5 m above it, a body with a compound mesh of two boxes: the solve
+        // has 3 unknowns per cloth node and 6 for the body, none for the mesh vertices, and the
+        // mesh follows the body.
+        let mut sim = Simulation::new(settings()).unwrap();
+        let cotton = crate::presets::SurfaceMaterial::cotton_fabric();
+        sim.add_surface_grid("cloth", [0.1, 0.1], [1, 1], &cotton).unwrap();
+        let props = MassProperties::cuboid(1.0, Vector3::repeat(0.1));
+        let up = Vector3::new(0.0, 0.0, 5.0);
+        let body = sim
+            .add_rigid_body_with("body", &props, up, UnitQuaternion::identity())
+            .unwrap();
+        let m = box_mesh(Vector3::repeat(0.1));
+        let mesh = sim
+            .add_rigid_collision_mesh(body, &m.vertices, &m.elements, None)
+            .unwrap();
+        let mut far = box_mesh(Vector3::repeat(0.1));
+        far.vertices.iter_mut().for_each(|v| v.x += 1.0);
+        sim.add_rigid_collision_mesh(body, &far.vertices, &far.elements, None)
+            .unwrap();
+        sim.set_body_angular_velocity(body, Vector3::new(0.0, 0.0, 1.0))
+            .unwrap();
+        sim.run(0.05).unwrap();
+        let rigid_vertices = 2 * m.vertices.len();
+        assert_eq!(sim.summary().nodes, 4 + rigid_vertices);
+        assert_eq!(sim.summary().unknowns, 3 * 4 + 6);
+        assert_eq!(3 * sim.newton.assembler.matrix.n_blocks, 3 * 4 + 6);
+        // The mesh vertices are where the body's pose puts them.
+        let x = sim.positions(mesh.nodes);
+        let (p, q) = (sim.body_position(body), sim.body_orientation(body));
+        for (xi, local) in x.iter().zip(&m.vertices) {
+            assert!((xi - (p + q * local)).norm() < 1e-12);
+        }
+    }
+
+    #[test]
     fn jointed_bodies_can_overlap_with_their_collision_off() {
         let build = |collide: bool| -> Result<Simulation> {
             let mut sim = Simulation::new(settings())?;

@@ -12,7 +12,7 @@ use super::settings::{LinearSolver, NewtonSettings, Projection};
 use crate::energy::assembly::{Assembled, Assembler};
 use crate::energy::kinematics::BodyPose;
 use crate::energy::{EnergyTerm, EvalMode};
-use crate::state::{apply_kinematic_map, dof_blocks, start_velocities, BodyArrays, EvalState, NodeArrays};
+use crate::state::{apply_kinematic_map, dof_blocks, start_velocities, BodyArrays, DofMap, EvalState, NodeArrays};
 use nalgebra::Vector3;
 use serde::Serialize;
 use std::time::Instant;
@@ -188,13 +188,14 @@ fn max_step(terms: &[&mut dyn EnergyTerm], from: &EvalState, to: &EvalState) -> 
     terms.iter().map(|t| t.max_step_fraction(from, to)).fold(1.0, f64::min)
 }
 
-fn axpy_velocities(base: &[Vector3<f64>], step: &[f64], alpha: f64, out: &mut Vec<Vector3<f64>>) {
+/// `out = base + alpha·step`: `step` is over the unknowns, `base` and `out` over all DOF blocks
+/// (the blocks that are not unknowns keep their value, zero).
+fn axpy_velocities(dofs: &DofMap, base: &[Vector3<f64>], step: &[f64], alpha: f64, out: &mut Vec<Vector3<f64>>) {
     out.clear();
-    out.extend(
-        base.iter()
-            .enumerate()
-            .map(|(i, b)| b + Vector3::new(step[3 * i], step[3 * i + 1], step[3 * i + 2]) * alpha),
-    );
+    out.extend_from_slice(base);
+    for (d, &block) in dofs.block_of_dof.iter().enumerate() {
+        out[block as usize] += Vector3::new(step[3 * d], step[3 * d + 1], step[3 * d + 2]) * alpha;
+    }
 }
 
 /// Solve one step: on success `v` holds the end-of-step velocities.
@@ -206,11 +207,12 @@ pub fn solve(
     settings: &NewtonSettings,
 ) -> Result<NewtonReport, NewtonFailure> {
     let n = dof_blocks(problem.nodes, problem.bodies);
+    let dofs = DofMap::new(problem.nodes, problem.bodies);
     let dt = problem.dt;
     let mut project = settings.projection == Projection::Always;
-    ws.gradient.resize(3 * n, 0.0);
-    ws.rhs.resize(3 * n, 0.0);
-    ws.step.resize(3 * n, 0.0);
+    ws.gradient.resize(3 * dofs.len(), 0.0);
+    ws.rhs.resize(3 * dofs.len(), 0.0);
+    ws.step.resize(3 * dofs.len(), 0.0);
     let mut report = NewtonReport {
         iterations: 0,
         residual_n: f64::INFINITY,
@@ -288,7 +290,7 @@ pub fn solve(
             };
             sums = match assembled.take() {
                 Some(done) => done,
-                None => ws.assembler.assemble(&shared, &state, n, mode, &mut ws.gradient),
+                None => ws.assembler.assemble(&shared, &state, &dofs, mode, &mut ws.gradient),
             };
             energy = sums.energy;
             report.times.evaluation_s += t1.elapsed().as_secs_f64();
@@ -303,9 +305,14 @@ pub fn solve(
             if iteration == 0 && !rebalanced {
                 // Once per step: terms may re-scale to balance the loads (barrier stiffness).
                 rebalanced = true;
+                // Terms read the gradient per DOF block.
+                let mut block_gradient = vec![0.0; 3 * n];
+                for (d, &block) in dofs.block_of_dof.iter().enumerate() {
+                    block_gradient[3 * block as usize..][..3].copy_from_slice(&ws.gradient[3 * d..][..3]);
+                }
                 let mut changed = false;
                 for t in terms.iter_mut() {
-                    changed |= t.rebalance(&state, &ws.gradient);
+                    changed |= t.rebalance(&state, &block_gradient);
                 }
                 if changed {
                     continue;
@@ -369,7 +376,7 @@ pub fn solve(
         let t_ccd = Instant::now();
 
         // Line search.
-        axpy_velocities(v, &ws.step, 1.0, &mut ws.trial_v);
+        axpy_velocities(&dofs, v, &ws.step, 1.0, &mut ws.trial_v);
         problem.place(&ws.trial_v, &mut ws.trial_x, &mut ws.trial_poses);
         let mut alpha = {
             let from = problem.state(v, &ws.x, &ws.poses);
@@ -398,7 +405,7 @@ pub fn solve(
         // The trial energy closest to the current one (how far apart they stay as α → 0).
         let mut closest = f64::INFINITY;
         for _ in 0..settings.max_line_search_iterations {
-            axpy_velocities(v, &ws.step, alpha, &mut ws.trial_v);
+            axpy_velocities(&dofs, v, &ws.step, alpha, &mut ws.trial_v);
             problem.place(&ws.trial_v, &mut ws.trial_x, &mut ws.trial_poses);
             {
                 let trial = problem.state(&ws.trial_v, &ws.trial_x, &ws.trial_poses);
@@ -431,7 +438,7 @@ pub fn solve(
                 // gradient and matrix may be overwritten).
                 let t4 = Instant::now();
                 let shared: Vec<&dyn EnergyTerm> = terms.iter().map(|t| &**t as &dyn EnergyTerm).collect();
-                let done = ws.assembler.assemble(&shared, &trial, n, mode, &mut ws.gradient);
+                let done = ws.assembler.assemble(&shared, &trial, &dofs, mode, &mut ws.gradient);
                 report.times.evaluation_s += t4.elapsed().as_secs_f64();
                 trial_residual = norm_inf(&ws.gradient) / dt;
                 if done.energy.is_finite() && trial_residual < residual {
