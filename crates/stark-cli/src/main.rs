@@ -402,6 +402,27 @@ fn print_logs(sim: &Simulation) {
     println!("logs                  {}", logs.join(", "));
 }
 
+/// The outcome of a robot–towel run (the scenes that write a `robot_towel` probe log).
+fn print_robot_towel_outcome(sim: &Simulation) {
+    use stark::scenes::kobuki_towel;
+    let o = &sim.settings.output;
+    let log = o
+        .directory
+        .join(format!("{}.{}.jsonl", sim.settings.name, kobuki_towel::PROBE));
+    if !o.step_log || !log.exists() {
+        return;
+    }
+    match kobuki_towel::classify_log(&log) {
+        Ok(c) => {
+            let lab = kobuki_towel::Case::from_name(&sim.settings.name)
+                .map(|case| format!(" (lab: {})", case.lab_outcome()))
+                .unwrap_or_default();
+            println!("outcome               {}{lab}: {}", c.outcome.letter(), c.reason);
+        }
+        Err(e) => eprintln!("warning: no outcome: {e}"),
+    }
+}
+
 /// Apply `settings.*` overrides to a built simulation's settings (built-in scenes are code, so
 /// only their settings can be overridden).
 fn override_settings(sim: &mut Simulation, overrides: &[String]) -> stark::Result<()> {
@@ -457,6 +478,7 @@ fn run_built(sim: &mut Simulation, duration: f64, opts: &RunOptions, check: bool
     }
     print_logs(sim);
     print_rigid_summary(sim, &summary);
+    print_robot_towel_outcome(sim);
     if !opts.no_plot && sim.settings.output.step_log {
         let log = out.join(format!("{}.steps.jsonl", sim.settings.name));
         let png = out.join(format!("{}.summary.png", sim.settings.name));

@@ -80,6 +80,8 @@ pub struct Output {
     log: Option<std::io::BufWriter<std::fs::File>>,
     bodies_log: Option<std::io::BufWriter<std::fs::File>>,
     joints_log: Option<std::io::BufWriter<std::fs::File>>,
+    /// Probe logs: name, what to record, and the file once opened.
+    pub(crate) probes: Vec<Probe>,
     scratch_x: Vec<Vector3<f64>>,
     scratch_v: Vec<Vector3<f64>>,
 }
@@ -382,7 +384,38 @@ impl Simulation {
             self.output.joints_log = Some(log);
             files.push(path);
         }
+        if o.step_log {
+            for probe in &mut self.output.probes {
+                let file = format!("{}.{}.jsonl", self.settings.name, probe.name);
+                let (log, path) = create_log(&o.directory, file, keep_lines)?;
+                probe.log = Some(log);
+                files.push(path);
+            }
+        }
         Ok(files)
+    }
+
+    /// Record a quantity of the simulation every accepted step: `record(sim)` is written as one
+    /// JSON line `{"step": …, "time_s": …, "<name>": record}` to `<scene>.<name>.jsonl` in the
+    /// output directory (when step logs are on), continued like the body and joint logs when a
+    /// run resumes from a checkpoint. Use it for what a scene measures (a robot's pose, a
+    /// towel's centroid, a grasp's slip).
+    pub fn add_probe<T: Serialize>(
+        &mut self,
+        name: &str,
+        record: impl Fn(&Simulation) -> T + Send + 'static,
+    ) -> Result<()> {
+        if name.is_empty() || name.contains(['/', '\\']) || self.output.probes.iter().any(|p| p.name == name) {
+            return Err(crate::error::StarkError::InvalidInput(format!(
+                "probe name '{name}' must be non-empty, without path separators, and unique"
+            )));
+        }
+        self.output.probes.push(Probe {
+            name: name.to_string(),
+            record: Box::new(move |sim| serde_json::to_value(record(sim)).expect("serialisable probe record")),
+            log: None,
+        });
+        Ok(())
     }
 
     /// Append the current body and joint states to their logs (those that are open).
@@ -406,8 +439,29 @@ impl Simulation {
             };
             write_line(&mut self.output.joints_log, "joint log", &line)?;
         }
-        Ok(())
+        let mut probes = std::mem::take(&mut self.output.probes);
+        let mut result = Ok(());
+        for p in probes.iter_mut().filter(|p| p.log.is_some()) {
+            let mut line = serde_json::Map::new();
+            line.insert("step".into(), step.into());
+            line.insert("time_s".into(), time_s.into());
+            line.insert(p.name.clone(), (p.record)(self));
+            result = write_line(&mut p.log, "probe log", &line);
+            if result.is_err() {
+                break;
+            }
+        }
+        self.output.probes = probes;
+        result
     }
+}
+
+/// A quantity recorded every step ([`Simulation::add_probe`]).
+pub(crate) struct Probe {
+    name: String,
+    #[allow(clippy::type_complexity)]
+    record: Box<dyn Fn(&Simulation) -> serde_json::Value + Send>,
+    log: Option<std::io::BufWriter<std::fs::File>>,
 }
 
 #[cfg(test)]

@@ -106,6 +106,10 @@ pub struct LinkOverride {
     /// A mesh file replacing the link's `<collision>` elements (in the link frame; relative
     /// paths as mesh URIs).
     pub collision_mesh: Option<PathBuf>,
+    /// A shape replacing the link's `<collision>` elements (in the link frame), from code: e.g.
+    /// an inline mesh compiled into a program. Takes precedence over `collision_mesh`.
+    #[serde(skip)]
+    pub collision_shape: Option<Shape>,
     /// Contact thickness of the link's collision mesh, m.
     pub contact_thickness_m: Option<f64>,
 }
@@ -788,7 +792,9 @@ impl Simulation {
             let top = group[l];
             let o = options.links.get(&link.name);
             let mut elements: Vec<(Shape, Isometry3<f64>, Option<usize>)> = Vec::new();
-            if let Some(mesh) = o.and_then(|o| o.collision_mesh.as_ref()) {
+            if let Some(shape) = o.and_then(|o| o.collision_shape.as_ref()) {
+                elements.push((shape.clone(), Isometry3::identity(), link_line(&link.name)));
+            } else if let Some(mesh) = o.and_then(|o| o.collision_mesh.as_ref()) {
                 let uri = mesh.to_string_lossy();
                 let path = resolve_uri(&uri, dir, roots_paths).map_err(|m| {
                     src.err(

@@ -1,6 +1,9 @@
 //! Built-in scenes, including exact replicas of the original Stark's shipped scenes
 //! (`reference/benchmark-scenes.md`) used for validation and benchmarks.
 
+pub mod kobuki_towel;
+pub mod robot_towel_outcome;
+
 use crate::contact::ContactHandle;
 use crate::deformables::PrescribedParams;
 use crate::error::{Result, StarkError};
@@ -23,8 +26,55 @@ pub struct BuiltinScene {
     pub build: fn(Settings) -> Result<Simulation>,
 }
 
+/// The 16 runs of the paper's robot–towel suite (parameter set `original`).
+macro_rules! kobuki_towel_scenes {
+    ($(($floor:ident, $floor_name:literal, $c:literal, $what:literal)),* $(,)?) => {
+        [$(BuiltinScene {
+            name: concat!("kobuki_towel_", $floor_name, "_", $c),
+            description: concat!(
+                "The paper's experiment: the Kobuki robot drives into a towel (", $what, ") on ",
+                $floor_name, ", 6 s; classified P/O/S"
+            ),
+            duration_s: kobuki_towel::DURATION_S,
+            build: |s| {
+                kobuki_towel::builtin(
+                    s,
+                    kobuki_towel::Case {
+                        floor: kobuki_towel::Floor::$floor,
+                        configuration: $c,
+                        params: kobuki_towel::ParamSet::Original,
+                    },
+                )
+            },
+        }),*]
+    };
+}
+
 /// Every built-in scene.
 pub fn builtin_scenes() -> Vec<BuiltinScene> {
+    let mut scenes = builtin_scenes_without_suites();
+    scenes.extend(kobuki_towel_scenes![
+        (Carpet, "carpet", 1, "flat"),
+        (Carpet, "carpet", 2, "1 fold"),
+        (Carpet, "carpet", 3, "2 folds"),
+        (Carpet, "carpet", 4, "3 folds, folded side"),
+        (Carpet, "carpet", 5, "3 folds, open side"),
+        (Carpet, "carpet", 6, "rolled, rolled side"),
+        (Carpet, "carpet", 7, "rolled, open side"),
+        (Carpet, "carpet", 8, "rolled sideways"),
+        (Polished, "polished", 1, "flat"),
+        (Polished, "polished", 2, "1 fold"),
+        (Polished, "polished", 3, "2 folds"),
+        (Polished, "polished", 4, "3 folds, folded side"),
+        (Polished, "polished", 5, "3 folds, open side"),
+        (Polished, "polished", 6, "rolled, rolled side"),
+        (Polished, "polished", 7, "rolled, open side"),
+        (Polished, "polished", 8, "rolled sideways"),
+    ]);
+    scenes
+}
+
+fn builtin_scenes_without_suites() -> Vec<BuiltinScene> {
     vec![
         BuiltinScene {
             name: "default",
@@ -797,8 +847,8 @@ pub const TOWEL_BOX_DURATION_S: f64 = 0.05;
 /// box–towel 0.4. The floor is a prescribed (kinematic) box whose top is `d̂` below the towel's
 /// lowest vertex, so the towel drops onto it within the first steps.
 pub fn towel_box(mut settings: Settings) -> Result<Simulation> {
-    const REST: &str = include_str!("../assets/paper-scenes/towel_flat.obj");
-    const FOLDED: &str = include_str!("../assets/paper-scenes/towel_2folds.obj");
+    const REST: &str = include_str!("../../assets/paper-scenes/towel_flat.obj");
+    const FOLDED: &str = include_str!("../../assets/paper-scenes/towel_2folds.obj");
     let dhat = 3.25e-3;
     let thickness = dhat / 2.0;
     settings.name = "towel_box".into();

@@ -1,0 +1,554 @@
+//! The paper's robot–towel experiment (§IV-A, Fig. 1, Table I): a Kobuki vacuum robot drives at
+//! 0.26 m/s into a towel lying on the floor, in eight towel configurations on two floors
+//! (carpet μ 1.0, polished μ 0.2). Each run is classified as the robot pushing the towel (P),
+//! driving over it (O) or getting stuck (S) ([`super::robot_towel_outcome`]).
+//!
+//! The robot is the project's own URDF (`assets/robots/kobuki_paper.urdf`, written from the
+//! paper's numbers) imported with overrides: the fitted body mesh `kobuki_collision.obj`, the
+//! suspension springs and the wheel motors. The towel is the original's 57 × 101 grid
+//! (1.35 × 0.75 m; the paper's text says 1.75 m): the flat grid is the rest shape, a
+//! configuration file the initial positions. Both meshes are the original's (Apache-2.0,
+//! `assets/paper-scenes`).
+//!
+//! Two parameter sets ([`ParamSet`]): `original`, the values of the original's code that produced
+//! Table I, and `paper`, the values the paper's text states where they differ.
+
+use super::robot_towel_outcome::Sample;
+use crate::contact::ContactHandle;
+use crate::deformables::NodeSetHandle;
+use crate::error::{Result, StarkError};
+use crate::presets::{meshes, SurfaceMaterial};
+use crate::rigidbodies::joints::JointHandle;
+use crate::rigidbodies::{RigidBodyHandle, Shape};
+use crate::robots::urdf::{Actuator, JointOverride, LinkOverride, Robot, RobotOptions};
+use crate::simulation::Simulation;
+use crate::solver::Settings;
+use nalgebra::Vector3;
+use std::path::Path;
+
+/// The robot's URDF (the project's own).
+pub const KOBUKI_URDF: &str = include_str!("../../assets/robots/kobuki_paper.urdf");
+/// The fitted collision mesh of the robot's body (the original's, about the body centre).
+pub const KOBUKI_COLLISION_OBJ: &str = include_str!("../../assets/paper-scenes/kobuki_collision.obj");
+/// The towel's rest shape: the flat grid.
+const TOWEL_FLAT_OBJ: &str = include_str!("../../assets/paper-scenes/towel_flat.obj");
+
+/// One towel configuration: a state of the flat grid.
+pub struct Configuration {
+    /// Short name.
+    pub name: &'static str,
+    /// The mesh file (in `assets/paper-scenes`).
+    pub file: &'static str,
+    /// Its text.
+    pub obj: &'static str,
+}
+
+/// The eight configurations in the paper's order (Table I, Fig. 3).
+pub const CONFIGURATIONS: [Configuration; 8] = [
+    Configuration {
+        name: "flat",
+        file: "towel_flat.obj",
+        obj: TOWEL_FLAT_OBJ,
+    },
+    Configuration {
+        name: "1 fold",
+        file: "towel_1fold.obj",
+        obj: include_str!("../../assets/paper-scenes/towel_1fold.obj"),
+    },
+    Configuration {
+        name: "2 folds",
+        file: "towel_2folds.obj",
+        obj: include_str!("../../assets/paper-scenes/towel_2folds.obj"),
+    },
+    Configuration {
+        name: "3 folds, folded side",
+        file: "towel_3folds_foldedside.obj",
+        obj: include_str!("../../assets/paper-scenes/towel_3folds_foldedside.obj"),
+    },
+    Configuration {
+        name: "3 folds, open side",
+        file: "towel_3folds_openside.obj",
+        obj: include_str!("../../assets/paper-scenes/towel_3folds_openside.obj"),
+    },
+    Configuration {
+        name: "rolled, rolled side",
+        file: "towel_rolled_rolledside.obj",
+        obj: include_str!("../../assets/paper-scenes/towel_rolled_rolledside.obj"),
+    },
+    Configuration {
+        name: "rolled, open side",
+        file: "towel_rolled_openside.obj",
+        obj: include_str!("../../assets/paper-scenes/towel_rolled_openside.obj"),
+    },
+    Configuration {
+        name: "rolled sideways",
+        file: "towel_rolled_side.obj",
+        obj: include_str!("../../assets/paper-scenes/towel_rolled_side.obj"),
+    },
+];
+
+/// The lab's outcomes (Table I), configurations 1–8: carpet, then polished.
+pub const LAB_OUTCOMES: [&str; 2] = ["OOOSSSSS", "OOPPPPOS"];
+/// The original Stark's outcomes (Table I).
+pub const PAPER_SIMULATION_OUTCOMES: [&str; 2] = ["OOOSSSSS", "OOPPPPOS"];
+
+/// The floor.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Floor {
+    /// Towel–floor friction 1.0.
+    Carpet,
+    /// Towel–floor friction 0.2.
+    Polished,
+}
+
+impl Floor {
+    /// Towel–floor friction coefficient.
+    pub fn towel_friction(self) -> f64 {
+        match self {
+            Floor::Carpet => 1.0,
+            Floor::Polished => 0.2,
+        }
+    }
+    /// Its name in scene names.
+    pub fn name(self) -> &'static str {
+        match self {
+            Floor::Carpet => "carpet",
+            Floor::Polished => "polished",
+        }
+    }
+}
+
+/// Which values to use where the original's code and the paper's text differ.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ParamSet {
+    /// The original's code (Table I's simulations): body 2.951 kg (3.551 kg in all), towel
+    /// 0.5 kg/m², strain limit 110% (Green strain 1.1, effectively off), strain and bending
+    /// damping 0.2.
+    Original,
+    /// The paper's text: 2.951 kg in all (body 2.351 kg), towel 0.484 kg, strain limit 10%,
+    /// damping 0.1.
+    Paper,
+}
+
+/// One run of the suite.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct Case {
+    /// The floor.
+    pub floor: Floor,
+    /// The towel configuration, 1–8.
+    pub configuration: usize,
+    /// The parameter set.
+    pub params: ParamSet,
+}
+
+impl Case {
+    /// The built-in scene name: `kobuki_towel_<floor>_<configuration>`.
+    pub fn name(&self) -> String {
+        format!("kobuki_towel_{}_{}", self.floor.name(), self.configuration)
+    }
+
+    /// The case of a built-in scene name (`kobuki_towel_<floor>_<configuration>`, set
+    /// `original`).
+    pub fn from_name(name: &str) -> Option<Case> {
+        let rest = name.strip_prefix("kobuki_towel_")?;
+        let (floor, c) = rest.rsplit_once('_')?;
+        let floor = match floor {
+            "carpet" => Floor::Carpet,
+            "polished" => Floor::Polished,
+            _ => return None,
+        };
+        let configuration: usize = c.parse().ok()?;
+        (1..=8).contains(&configuration).then_some(Case {
+            floor,
+            configuration,
+            params: ParamSet::Original,
+        })
+    }
+
+    /// The lab's outcome of this case (Table I).
+    pub fn lab_outcome(&self) -> char {
+        let row = LAB_OUTCOMES[(self.floor == Floor::Polished) as usize];
+        row.as_bytes()[self.configuration - 1] as char
+    }
+}
+
+/// Simulated duration of a run, s.
+pub const DURATION_S: f64 = 6.0;
+/// Contact distance d̂ = the towel's thickness, m.
+pub const DHAT_M: f64 = 3.25e-3;
+/// The towel's offset from the robot's centre along the driving direction, m.
+const TOWEL_OFFSET_Y_M: f64 = 0.5;
+/// Height of the body centre above the floor at rest (casters on the floor), m.
+const BODY_HEIGHT_M: f64 = 0.057;
+/// The robot starts this far above its resting height, m.
+const DROP_M: f64 = 0.005;
+/// Wheel motors: target rate (0.26 m/s on r = 0.035 m), rad/s; stall torque, N·m.
+pub const MOTOR_TARGET_RAD_S: f64 = 7.43;
+/// Stall torque of each drive motor, N·m.
+pub const MOTOR_MAX_TORQUE_N_M: f64 = 0.0666;
+/// Suspension spring: stiffness N/m, rest length m (body centre to axle), damping N·s/m (in
+/// the URDF).
+const SUSPENSION_STIFFNESS_N_M: f64 = 1.6e3;
+const SUSPENSION_REST_LENGTH_M: f64 = 0.035;
+/// Body centre to axle at the URDF's zero of the suspension sliders, m.
+const SUSPENSION_ZERO_LENGTH_M: f64 = 0.022;
+
+/// The robot and towel of a built run, for sampling.
+pub struct RobotTowel {
+    /// The case.
+    pub case: Case,
+    /// The robot.
+    pub robot: Robot,
+    /// The robot's body.
+    pub body: RigidBodyHandle,
+    /// The body's collision-mesh vertices.
+    pub body_mesh: NodeSetHandle,
+    /// The towel's nodes.
+    pub towel: NodeSetHandle,
+    /// The towel's contact object.
+    pub towel_contact: ContactHandle,
+    /// The drive wheels' contact objects (left, right).
+    pub wheel_contacts: [ContactHandle; 2],
+    /// The drive motors (left, right).
+    pub motors: [JointHandle; 2],
+    /// The suspension sliders (left, right).
+    pub suspensions: [JointHandle; 2],
+}
+
+/// Per-step record of a run (a line of the probe log `<scene>.robot_towel.jsonl`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Record {
+    /// The classifier's sample.
+    pub sample: Sample,
+    /// Motor torques (left, right), N·m.
+    pub motor_torque_n_m: [f64; 2],
+    /// Wheel rates relative to their arms (left, right), rad/s; positive forward.
+    pub wheel_speed_rad_s: [f64; 2],
+    /// Suspension compression (left, right): rest length minus length, m.
+    pub suspension_compression_m: [f64; 2],
+    /// Robot body centre, m.
+    pub robot_position_m: [f64; 3],
+    /// Robot heading: the body's +y axis angle from +y about z, deg.
+    pub robot_yaw_deg: f64,
+    /// Robot pitch: the body's +y axis angle above the floor, deg (front up positive).
+    pub robot_pitch_deg: f64,
+    /// Towel centroid, m.
+    pub towel_centroid_m: [f64; 3],
+}
+
+impl RobotTowel {
+    /// The state of the run now.
+    pub fn record(&self, sim: &Simulation) -> Record {
+        let towel = sim.positions(self.towel);
+        let n = towel.len().max(1) as f64;
+        let centroid = towel.iter().sum::<Vector3<f64>>() / n;
+        let far = towel.iter().map(|p| p.y).fold(f64::NEG_INFINITY, f64::max);
+        let rear = sim
+            .positions(self.body_mesh)
+            .iter()
+            .map(|p| p.y)
+            .fold(f64::INFINITY, f64::min);
+        let towel_object = self.towel_contact.0 as u16;
+        let on_towel = self.wheel_contacts.iter().any(|w| {
+            let w = w.0 as u16;
+            sim.contact
+                .pairs()
+                .iter()
+                .any(|p| p.objects == [w, towel_object] || p.objects == [towel_object, w])
+        });
+        let motor = self.motors.each_ref().map(|m| sim.joint_state(m));
+        let suspension = self.suspensions.each_ref().map(|j| sim.joint_state(j));
+        let q = sim.body_orientation(self.body);
+        let forward = q * Vector3::y();
+        let p = sim.body_position(self.body);
+        let torque = motor.map(|m| m.driver_effort);
+        Record {
+            sample: Sample {
+                time_s: sim.time(),
+                robot_y_m: p.y,
+                robot_rear_y_m: rear,
+                towel_centroid_y_m: centroid.y,
+                towel_far_edge_y_m: far,
+                drive_wheel_on_towel: on_towel,
+                motor_torque_fraction: 0.5 * (torque[0].abs() + torque[1].abs()) / MOTOR_MAX_TORQUE_N_M,
+            },
+            motor_torque_n_m: torque,
+            wheel_speed_rad_s: motor.map(|m| m.coordinate_rate.unwrap_or(0.0)),
+            // The slider coordinate is the arm's rise from the URDF zero (0.022 m below the
+            // body centre): length = 0.022 − q.
+            suspension_compression_m: suspension.map(|s| {
+                SUSPENSION_REST_LENGTH_M - (SUSPENSION_ZERO_LENGTH_M - s.coordinate.unwrap_or(0.0))
+            }),
+            robot_position_m: p.into(),
+            robot_yaw_deg: (-forward.x).atan2(forward.y).to_degrees(),
+            robot_pitch_deg: forward.z.atan2(forward.xy().norm()).to_degrees(),
+            towel_centroid_m: centroid.into(),
+        }
+    }
+}
+
+fn parse(obj: &str, file: &str) -> Result<meshes::Mesh<3>> {
+    Ok(crate::io::mesh_files::parse_obj(obj, file)?)
+}
+
+/// Build a run of the suite (see the module docs for the model).
+pub fn build(mut settings: Settings, case: Case) -> Result<(Simulation, RobotTowel)> {
+    if !(1..=8).contains(&case.configuration) {
+        return Err(StarkError::InvalidInput(format!(
+            "towel configuration {} does not exist: the paper's are 1–8",
+            case.configuration
+        )));
+    }
+    let configuration = &CONFIGURATIONS[case.configuration - 1];
+    let thickness = DHAT_M / 2.0;
+    settings.name = case.name();
+    settings.time_step_s = 0.005;
+    settings.newton.residual_tolerance_n = 1e-6;
+    settings.contact.default_thickness_m = Some(thickness);
+
+    // ---- Towel: rest shape the flat grid, initial positions the configuration ----
+    let rest = parse(TOWEL_FLAT_OBJ, "towel_flat.obj")?;
+    let initial = parse(configuration.obj, configuration.file)?;
+    if initial.elements != rest.elements || initial.vertices.len() != rest.vertices.len() {
+        return Err(StarkError::InvalidInput(format!(
+            "{} and towel_flat.obj must share their connectivity",
+            configuration.file
+        )));
+    }
+    let offset = Vector3::new(0.0, TOWEL_OFFSET_Y_M, 0.0);
+    let start: Vec<Vector3<f64>> = initial.vertices.iter().map(|p| p + offset).collect();
+    let z_min = start.iter().map(|p| p.z).fold(f64::INFINITY, f64::min);
+    let floor_top = z_min - DHAT_M;
+
+    let h = DHAT_M;
+    let e = 1.5e4;
+    let (density, damping, strain_limit) = match case.params {
+        ParamSet::Original => (0.5, 0.2, 1.1),
+        // 0.484 kg over the grid's 1.35 × 0.75 m.
+        ParamSet::Paper => (0.484 / (1.35 * 0.75), 0.1, 0.1),
+    };
+    let towel_material = SurfaceMaterial {
+        inertia: crate::deformables::InertiaParams {
+            density,
+            damping: 2.0,
+            quasistatic: false,
+        },
+        strain: crate::deformables::TriangleStrainParams {
+            thickness_m: h,
+            youngs_modulus: e,
+            poissons_ratio: 0.3,
+            damping,
+            strain_limit,
+            ..Default::default()
+        },
+        bending: crate::presets::Bending::Flat(crate::deformables::FlatBendingParams {
+            stiffness: 5e-6,
+            damping,
+        }),
+        contact_thickness_m: Some(thickness),
+    };
+    let mut sim = Simulation::new(settings)?;
+    let towel = sim.add_surface("towel", &rest.vertices, &rest.elements, &towel_material)?;
+    for (x, p) in sim.nodes.x[towel.nodes.range()].iter_mut().zip(&start) {
+        *x = *p;
+    }
+    let towel_contact = towel.contact.expect("the towel has a contact thickness");
+
+    // ---- Floor: a fixed slab under the towel and the robot's path ----
+    let floor_size = Vector3::new(2.0, 3.0, 0.05);
+    let mut floor = meshes::box_mesh(floor_size);
+    for v in &mut floor.vertices {
+        *v += Vector3::new(0.0, 1.0, floor_top - floor_size.z / 2.0);
+    }
+    let floor = sim.add_prescribed_surface("floor", &floor.vertices, &floor.elements, thickness, 1e6)?;
+
+    // ---- Robot ----
+    let body_mesh = parse(KOBUKI_COLLISION_OBJ, "kobuki_collision.obj")?;
+    let mut options = RobotOptions {
+        position_m: Vector3::new(0.0, 0.0, floor_top + BODY_HEIGHT_M + DROP_M),
+        // No contact inside the robot (body, arms, wheels, casters).
+        self_collision: false,
+        contact_thickness_m: Some(thickness),
+        ..Default::default()
+    };
+    options.links.insert(
+        "base_link".into(),
+        LinkOverride {
+            collision_shape: Some(Shape::Mesh {
+                vertices_m: body_mesh.vertices,
+                triangles: body_mesh.elements,
+                scale: Vector3::repeat(1.0),
+            }),
+            mass_kg: match case.params {
+                ParamSet::Original => None,
+                ParamSet::Paper => Some(2.951 - 6.0 * 0.1),
+            },
+            ..Default::default()
+        },
+    );
+    for side in ["left", "right"] {
+        options.joints.insert(
+            format!("suspension_{side}_joint"),
+            JointOverride {
+                actuator: Some(Actuator::SpringDamper {
+                    stiffness: SUSPENSION_STIFFNESS_N_M,
+                    // Rest length 0.035 m from the body centre to the axle: the arm 0.013 m below
+                    // the URDF zero.
+                    rest: SUSPENSION_ZERO_LENGTH_M - SUSPENSION_REST_LENGTH_M,
+                    damping: 0.0,
+                }),
+                ..Default::default()
+            },
+        );
+        options.joints.insert(
+            format!("wheel_{side}_joint"),
+            JointOverride {
+                actuator: Some(Actuator::Motor {
+                    target_rad_s: MOTOR_TARGET_RAD_S,
+                    max_torque_n_m: Some(MOTOR_MAX_TORQUE_N_M),
+                }),
+                ..Default::default()
+            },
+        );
+    }
+    let robot = sim.add_robot_from_str("kobuki", KOBUKI_URDF, "kobuki_paper.urdf", Path::new("."), &options)?;
+    let body = robot.body("base_link").expect("the URDF has base_link");
+    let mesh_of = |link: &str| {
+        let b = robot.body(link).expect("link of the URDF");
+        robot
+            .collision_meshes
+            .iter()
+            .find(|m| m.body == b)
+            .copied()
+            .expect("the link has a collision mesh")
+    };
+    let wheels = [mesh_of("wheel_left"), mesh_of("wheel_right")];
+    let casters = [mesh_of("caster_front"), mesh_of("caster_back")];
+    let base = mesh_of("base_link");
+
+    // ---- Friction ----
+    sim.contact.set_friction(towel_contact, towel_contact, 0.4)?;
+    sim.contact
+        .set_friction(towel_contact, floor.contact, case.floor.towel_friction())?;
+    for m in wheels.iter().chain(&casters).chain([&base]) {
+        sim.contact.set_friction(m.contact, towel_contact, 1.0)?;
+        sim.contact.set_friction(m.contact, floor.contact, 1.0)?;
+    }
+    let joint = |name: &str| robot.joint(name).cloned().expect("joint of the URDF");
+    let handles = RobotTowel {
+        case,
+        body,
+        body_mesh: base.nodes,
+        towel: towel.nodes,
+        towel_contact,
+        wheel_contacts: wheels.map(|w| w.contact),
+        motors: [joint("wheel_left_joint"), joint("wheel_right_joint")],
+        suspensions: [joint("suspension_left_joint"), joint("suspension_right_joint")],
+        robot,
+    };
+    Ok((sim, handles))
+}
+
+/// Name of the probe log a built-in run writes: `<scene>.robot_towel.jsonl`.
+pub const PROBE: &str = "robot_towel";
+
+/// The built-in scene of a case: [`build`], recording a [`Record`] every step in the probe log
+/// `<scene>.robot_towel.jsonl` (classified by [`classify_log`]).
+pub fn builtin(settings: Settings, case: Case) -> Result<Simulation> {
+    let (mut sim, run) = build(settings, case)?;
+    sim.add_probe(PROBE, move |sim| run.record(sim))?;
+    Ok(sim)
+}
+
+/// The records of a run's probe log (`<dir>/<scene>.robot_towel.jsonl`).
+pub fn read_log(path: &Path) -> Result<Vec<Record>> {
+    let text = std::fs::read_to_string(path).map_err(|e| StarkError::Output {
+        path: path.display().to_string(),
+        source: e,
+    })?;
+    text.lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty())
+        .map(|(i, l)| {
+            #[derive(serde::Deserialize)]
+            struct Line {
+                robot_towel: Record,
+            }
+            serde_json::from_str::<Line>(l)
+                .map(|line| line.robot_towel)
+                .map_err(|e| StarkError::InvalidInput(format!("{}:{}: {e}", path.display(), i + 1)))
+        })
+        .collect()
+}
+
+/// Classify a run from its probe log.
+pub fn classify_log(path: &Path) -> Result<super::robot_towel_outcome::Classification> {
+    let samples: Vec<Sample> = read_log(path)?.iter().map(|r| r.sample).collect();
+    super::robot_towel_outcome::classify(&samples, &Default::default())
+        .map_err(|e| StarkError::InvalidInput(format!("{}: {e}", path.display())))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn quiet() -> Settings {
+        let mut s = Settings::default();
+        s.output.frames = false;
+        s.output.step_log = false;
+        s.threads = 1;
+        s
+    }
+
+    #[test]
+    fn every_case_builds_with_the_papers_geometry() {
+        for floor in [Floor::Carpet, Floor::Polished] {
+            for configuration in 1..=8 {
+                let case = Case {
+                    floor,
+                    configuration,
+                    params: ParamSet::Original,
+                };
+                let (sim, run) = build(quiet(), case).unwrap();
+                let r = run.record(&sim);
+                // Body centre 57 mm + 5 mm above the floor, which is d̂ under the towel.
+                let towel = sim.positions(run.towel);
+                let z_min = towel.iter().map(|p| p.z).fold(f64::INFINITY, f64::min);
+                let height = r.robot_position_m[2] - (z_min - DHAT_M);
+                assert!((height - 0.062).abs() < 1e-12, "{height}");
+                // The towel starts ahead of the robot's front.
+                let near = towel.iter().map(|p| p.y).fold(f64::INFINITY, f64::min);
+                assert!(near > 0.18 + 0.3, "{}: near edge {near}", case.name());
+                assert_eq!(towel.len(), 5757);
+            }
+        }
+    }
+
+    #[test]
+    fn masses_follow_the_parameter_set() {
+        for (params, total) in [(ParamSet::Original, 3.551), (ParamSet::Paper, 2.951)] {
+            let case = Case {
+                floor: Floor::Carpet,
+                configuration: 1,
+                params,
+            };
+            let (sim, run) = build(quiet(), case).unwrap();
+            let robot: f64 = run.robot.bodies.iter().map(|(_, b)| sim.bodies.mass[b.i()]).sum();
+            assert!((robot - total).abs() < 1e-9, "{params:?}: {robot}");
+        }
+    }
+
+    #[test]
+    fn lab_outcomes_are_table_one() {
+        let case = |floor, configuration| Case {
+            floor,
+            configuration,
+            params: ParamSet::Original,
+        };
+        assert_eq!(case(Floor::Carpet, 4).lab_outcome(), 'S');
+        assert_eq!(case(Floor::Polished, 3).lab_outcome(), 'P');
+        assert_eq!(case(Floor::Polished, 7).lab_outcome(), 'O');
+    }
+}
