@@ -12,6 +12,7 @@ use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 mod plot;
+mod sweep;
 mod view;
 
 #[derive(Parser)]
@@ -79,6 +80,13 @@ enum Command {
         /// Write the run summary as JSON to this file.
         #[arg(long)]
         summary_json: Option<PathBuf>,
+    },
+    /// Run a sweep file: a base scene and a grid of values, as independent processes, resumable
+    /// (finished cases are skipped, interrupted ones continue from their checkpoints); ends
+    /// with a summary. See `sweeps/` for examples.
+    Sweep {
+        /// The sweep file (TOML).
+        file: PathBuf,
     },
     /// List the built-in scenes.
     List,
@@ -796,6 +804,7 @@ fn main() -> ExitCode {
             opts,
             summary_json,
         } => resume(checkpoint, duration, out, opts, summary_json),
+        Command::Sweep { file } => sweep::sweep(&file).map(|ok| if ok { ExitCode::SUCCESS } else { ExitCode::FAILURE }),
         Command::List => {
             list();
             Ok(ExitCode::SUCCESS)

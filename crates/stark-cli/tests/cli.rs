@@ -168,3 +168,77 @@ fn sigint_prints_the_summary_keeps_the_logs_and_the_checkpoint_resumes() {
         );
     }
 }
+
+#[test]
+fn sweep_runs_cases_in_parallel_skips_finished_ones_and_summarises() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("sweep.toml");
+    std::fs::write(
+        &file,
+        r#"
+scene = "rb_point"
+out = "runs"
+results = "results"
+jobs = 2
+threads = 1
+duration_s = 0.1
+checkpoint_every_s = 0.05
+[grid]
+"settings.time_step_s" = [0.02, 0.01]
+"#,
+    )
+    .unwrap();
+    let first = ok(stark().arg("sweep").arg(&file).output().unwrap());
+    assert!(first.contains("2 cases, 0 finished, 2 to run"), "{first}");
+    let results = dir.path().join("results");
+    let steps: Vec<u64> = ["rb_point__time_step_s=0.02", "rb_point__time_step_s=0.01"]
+        .iter()
+        .map(|case| {
+            let text = std::fs::read_to_string(results.join(format!("{case}.json"))).unwrap();
+            let r: serde_json::Value = serde_json::from_str(&text).unwrap();
+            assert!((r["summary"]["simulated_time_s"].as_f64().unwrap() - 0.1).abs() < 1e-12, "{r}");
+            r["summary"]["steps"].as_u64().unwrap()
+        })
+        .collect();
+    // Each case ran with its own time step (the finer one may grow back after easy steps).
+    assert_eq!(steps[0], 5);
+    assert!(steps[1] > steps[0], "{steps:?}");
+    let md = std::fs::read_to_string(results.join("summary.md")).unwrap();
+    assert_eq!(md.lines().filter(|l| l.starts_with("| rb_point")).count(), 2, "{md}");
+
+    // Finished cases are skipped; a lost result file is collected again from the run's
+    // checkpoint at the end, without simulating.
+    std::fs::remove_file(results.join("rb_point__time_step_s=0.01.json")).unwrap();
+    let second = ok(stark().arg("sweep").arg(&file).output().unwrap());
+    assert!(second.contains("2 cases, 1 finished, 1 to run"), "{second}");
+    assert!(!second.contains("start"), "{second}");
+    assert!(results.join("rb_point__time_step_s=0.01.json").exists());
+}
+
+#[test]
+fn sweep_resumes_an_interrupted_case_from_its_checkpoint() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("sweep.toml");
+    std::fs::write(
+        &file,
+        "scene = \"rb_point\"\nout = \"runs\"\nresults = \"results\"\nduration_s = 0.2\ncheckpoint_every_s = 0.05\n",
+    )
+    .unwrap();
+    // A run of the case's first 0.1 s, as an interrupted sweep leaves it.
+    let run_dir = dir.path().join("runs/rb_point");
+    ok(stark()
+        .args(["run", "--scene", "rb_point", "--duration", "0.1", "--threads", "1", "--quiet"])
+        .args(["--checkpoint-every", "0.05", "--no-frames", "--out"])
+        .arg(&run_dir)
+        .output()
+        .unwrap());
+    let out = ok(stark().arg("sweep").arg(&file).output().unwrap());
+    assert!(out.contains("done                  rb_point"), "{out}");
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("results/rb_point.json")).unwrap()).unwrap();
+    // The summary covers the whole run: 0.2 s, the first half from before the resume.
+    assert!((r["summary"]["simulated_time_s"].as_f64().unwrap() - 0.2).abs() < 1e-9, "{r}");
+    let log = run_dir.join("rb_point.steps.jsonl");
+    let steps = log_lines(&log);
+    assert_eq!(steps.len() as u64, r["summary"]["steps"].as_u64().unwrap());
+}

@@ -57,6 +57,10 @@ pub enum Actuator {
         target_rad_s: f64,
         /// Torque cap, N·m (default: the URDF effort).
         max_torque_n_m: Option<f64>,
+        /// Width of the smooth transition to the cap: the rate error at which the torque
+        /// reaches it, rad/s (default 0.01).
+        #[serde(default)]
+        delay_rad_s: Option<f64>,
     },
     /// A force-limited press or gripper on a slider ([`Simulation::add_prismatic_press`]):
     /// drives the joint rate to `target_m_s`, pushing with at most `max_force_n`, and stalls
@@ -980,6 +984,7 @@ impl Simulation {
                             Some(Actuator::Motor {
                                 target_rad_s,
                                 max_torque_n_m,
+                                delay_rad_s,
                             }),
                             _,
                         ) => self.add_motor(
@@ -990,7 +995,7 @@ impl Simulation {
                             axis,
                             speed(*target_rad_s),
                             effort(*max_torque_n_m)?,
-                            DEFAULT_CONTROLLER_DELAY,
+                            delay_rad_s.unwrap_or(DEFAULT_CONTROLLER_DELAY),
                             params,
                         ),
                         (
