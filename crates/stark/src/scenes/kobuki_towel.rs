@@ -144,15 +144,23 @@ pub struct Case {
 }
 
 impl Case {
-    /// The built-in scene name: `kobuki_towel_<floor>_<configuration>`.
+    /// The built-in scene name: `kobuki_towel_<floor>_<configuration>`, with `_paper` for the
+    /// parameter set `paper`.
     pub fn name(&self) -> String {
-        format!("kobuki_towel_{}_{}", self.floor.name(), self.configuration)
+        let suffix = match self.params {
+            ParamSet::Original => "",
+            ParamSet::Paper => "_paper",
+        };
+        format!("kobuki_towel_{}_{}{suffix}", self.floor.name(), self.configuration)
     }
 
-    /// The case of a built-in scene name (`kobuki_towel_<floor>_<configuration>`, set
-    /// `original`).
+    /// The case of a built-in scene name ([`Case::name`]).
     pub fn from_name(name: &str) -> Option<Case> {
         let rest = name.strip_prefix("kobuki_towel_")?;
+        let (rest, params) = match rest.strip_suffix("_paper") {
+            Some(r) => (r, ParamSet::Paper),
+            None => (rest, ParamSet::Original),
+        };
         let (floor, c) = rest.rsplit_once('_')?;
         let floor = match floor {
             "carpet" => Floor::Carpet,
@@ -163,7 +171,7 @@ impl Case {
         (1..=8).contains(&configuration).then_some(Case {
             floor,
             configuration,
-            params: ParamSet::Original,
+            params,
         })
     }
 
@@ -544,6 +552,22 @@ mod tests {
             let robot: f64 = run.robot.bodies.iter().map(|(_, b)| sim.bodies.mass[b.i()]).sum();
             assert!((robot - total).abs() < 1e-9, "{params:?}: {robot}");
         }
+    }
+
+    #[test]
+    fn builtin_names_round_trip() {
+        for scene in crate::scenes::builtin_scenes() {
+            if let Some(case) = Case::from_name(scene.name) {
+                assert_eq!(case.name(), scene.name);
+            }
+        }
+        let n = crate::scenes::builtin_scenes()
+            .iter()
+            .filter(|s| Case::from_name(s.name).is_some())
+            .count();
+        assert_eq!(n, 32);
+        assert_eq!(Case::from_name("kobuki_towel_carpet_9"), None);
+        assert_eq!(Case::from_name("kobuki_towel_grass_1"), None);
     }
 
     #[test]

@@ -26,7 +26,8 @@ pub struct BuiltinScene {
     pub build: fn(Settings) -> Result<Simulation>,
 }
 
-/// The 16 runs of the paper's robot–towel suite (parameter set `original`).
+/// The 16 runs of the paper's robot–towel suite, with the parameter set `original`, then with
+/// `paper` (names ending in `_paper`).
 macro_rules! kobuki_towel_scenes {
     ($(($floor:ident, $floor_name:literal, $c:literal, $what:literal)),* $(,)?) => {
         [$(BuiltinScene {
@@ -43,6 +44,23 @@ macro_rules! kobuki_towel_scenes {
                         floor: kobuki_towel::Floor::$floor,
                         configuration: $c,
                         params: kobuki_towel::ParamSet::Original,
+                    },
+                )
+            },
+        },)*
+        $(BuiltinScene {
+            name: concat!("kobuki_towel_", $floor_name, "_", $c, "_paper"),
+            description: concat!(
+                "kobuki_towel_", $floor_name, "_", $c, " with the parameters the paper's text states"
+            ),
+            duration_s: kobuki_towel::DURATION_S,
+            build: |s| {
+                kobuki_towel::builtin(
+                    s,
+                    kobuki_towel::Case {
+                        floor: kobuki_towel::Floor::$floor,
+                        configuration: $c,
+                        params: kobuki_towel::ParamSet::Paper,
                     },
                 )
             },
