@@ -429,6 +429,20 @@ fn print_robot_towel_outcome(sim: &Simulation) {
         }
         Err(e) => eprintln!("warning: no outcome: {e}"),
     }
+    // The paper's Fig. 1: motor torque and suspension compression over time (with the wheel
+    // speeds and the robot's advance).
+    let png = o.directory.join(format!("{}.motors.png", sim.settings.name));
+    let series = [
+        "robot_towel.motor_torque_n_m",
+        "robot_towel.suspension_compression_m",
+        "robot_towel.wheel_speed_rad_s",
+        "robot_towel.sample.robot_y_m",
+    ]
+    .map(String::from);
+    match plot::plot_logs(&[log], &series, Some(&png)) {
+        Ok(p) => println!("motor plot            {}", p.display()),
+        Err(e) => eprintln!("warning: no motor plot: {e}"),
+    }
 }
 
 /// Apply `settings.*` overrides to a built simulation's settings (built-in scenes are code, so
