@@ -443,6 +443,17 @@ fn print_robot_towel_outcome(sim: &Simulation) {
         Ok(p) => println!("motor plot            {}", p.display()),
         Err(e) => eprintln!("warning: no motor plot: {e}"),
     }
+    // The final state, top and side views, around the robot and the towel.
+    let png = o.directory.join(format!("{}.final.png", sim.settings.name));
+    let meshes: Vec<_> = plot::picture_meshes(sim)
+        .into_iter()
+        .filter(|m| m.label != "floor")
+        .collect();
+    let title = format!("{} at t = {:.2} s", sim.settings.name, sim.time());
+    match plot::picture(&meshes, &title, None, &png) {
+        Ok(()) => println!("final state           {}", png.display()),
+        Err(e) => eprintln!("warning: no picture of the final state: {e}"),
+    }
 }
 
 /// Apply `settings.*` overrides to a built simulation's settings (built-in scenes are code, so

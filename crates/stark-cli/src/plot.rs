@@ -309,6 +309,139 @@ pub fn summary_plot(step_log: &Path, png: &Path) -> Result<()> {
     draw(&series, &format!("{name}: solver per step"), png)
 }
 
+/// One mesh of a picture: its label and its edges as world segments.
+pub struct PictureMesh {
+    /// Label (legend).
+    pub label: String,
+    /// Edges, m.
+    pub edges: Vec<[[f64; 3]; 2]>,
+}
+
+/// The edges of every output mesh of a simulation (triangles and segments; tets by their edges
+/// too, points as short ticks), in world coordinates.
+pub fn picture_meshes(sim: &stark::Simulation) -> Vec<PictureMesh> {
+    use stark::io::output::OutputCells;
+    sim.output
+        .meshes
+        .iter()
+        .map(|m| {
+            let x = sim.positions(m.set);
+            let p = |i: usize| -> [f64; 3] { x[i].into() };
+            let mut edges: Vec<[[f64; 3]; 2]> = Vec::new();
+            match &m.cells {
+                OutputCells::Points => edges.extend((0..x.len()).map(|i| [p(i), p(i)])),
+                OutputCells::Segments(s) => edges.extend(s.iter().map(|e| [p(e[0]), p(e[1])])),
+                OutputCells::Triangles(t) => {
+                    // Each edge once (an interior edge belongs to two triangles).
+                    let mut idx: Vec<(usize, usize)> = t
+                        .iter()
+                        .flat_map(|f| {
+                            (0..3).map(move |k| {
+                                let (a, b) = (f[k], f[(k + 1) % 3]);
+                                (a.min(b), a.max(b))
+                            })
+                        })
+                        .collect();
+                    idx.sort_unstable();
+                    idx.dedup();
+                    edges.extend(idx.into_iter().map(|(a, b)| [p(a), p(b)]));
+                }
+                OutputCells::Tets(t) => {
+                    for c in t {
+                        for (a, b) in [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)] {
+                            edges.push([p(c[a]), p(c[b])]);
+                        }
+                    }
+                }
+            }
+            PictureMesh {
+                label: m.label.clone(),
+                edges,
+            }
+        })
+        .collect()
+}
+
+/// A picture of a state: a top view (x–y) above a side view (y–z, looking along −x) of the
+/// meshes' edges, to scale, one colour per mesh, limited to `region` (`[min, max]` corners, m)
+/// when given.
+pub fn picture(meshes: &[PictureMesh], title: &str, region: Option<[[f64; 3]; 2]>, png: &Path) -> Result<()> {
+    register_font();
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for e in meshes.iter().flat_map(|m| &m.edges) {
+        for q in e {
+            for k in 0..3 {
+                lo[k] = lo[k].min(q[k]);
+                hi[k] = hi[k].max(q[k]);
+            }
+        }
+    }
+    if let Some([a, b]) = region {
+        lo = a;
+        hi = b;
+    }
+    if !lo.iter().chain(&hi).all(|v| v.is_finite()) {
+        return Err(StarkError::InvalidInput("nothing to draw".into()));
+    }
+    let span = |k: usize| (hi[k] - lo[k]).max(1e-3);
+    // Side view stretched in z so thin layers show; the factor is in its caption.
+    let z_stretch = (0.25 * span(1) / span(2)).clamp(1.0, 10.0);
+    let width = WIDTH_PX;
+    let scale = (width as f64 - 100.0) / span(1);
+    let top_h = (span(0) * scale) as u32 + 60;
+    let side_h = (span(2) * z_stretch * scale) as u32 + 60;
+    let root = BitMapBackend::new(png, (width, top_h + side_h + 40)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| plot_err(png, e))?;
+    let root = root.titled(title, ("sans-serif", 20)).map_err(|e| plot_err(png, e))?;
+    let (top, side) = root.split_vertically(top_h);
+    let views: [(&DrawingArea<_, _>, usize, String); 2] = [
+        (&top, 0, "top view: y (driving direction) → right, x ↑".to_string()),
+        (&side, 2, format!("side view: y → right, z ↑ (z stretched {z_stretch:.1}×)")),
+    ];
+    for (area, k, caption) in views {
+        let mut chart = ChartBuilder::on(area)
+            .caption(caption, ("sans-serif", 14))
+            .margin(10)
+            .x_label_area_size(25)
+            .y_label_area_size(55)
+            .build_cartesian_2d(lo[1]..hi[1], lo[k]..hi[k])
+            .map_err(|e| plot_err(png, e))?;
+        chart
+            .configure_mesh()
+            .disable_mesh()
+            .x_desc("y [m]")
+            .y_desc(if k == 0 { "x [m]" } else { "z [m]" })
+            .draw()
+            .map_err(|e| plot_err(png, e))?;
+        for (i, m) in meshes.iter().enumerate() {
+            let color = Palette99::pick(i).to_rgba();
+            let inside = |q: &[f64; 3]| (0..3).all(|c| q[c] >= lo[c] - 1e-9 && q[c] <= hi[c] + 1e-9);
+            let segments = m
+                .edges
+                .iter()
+                .filter(|e| inside(&e[0]) && inside(&e[1]))
+                .map(move |e| PathElement::new(vec![(e[0][1], e[0][k]), (e[1][1], e[1][k])], color.stroke_width(1)));
+            let s = chart.draw_series(segments).map_err(|e| plot_err(png, e))?;
+            if k == 0 {
+                s.label(m.label.clone())
+                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 15, y)], color.stroke_width(2)));
+            }
+        }
+        if k == 0 {
+            chart
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.8))
+                .border_style(BLACK)
+                .label_font(("sans-serif", 12))
+                .draw()
+                .map_err(|e| plot_err(png, e))?;
+        }
+    }
+    root.present().map_err(|e| plot_err(png, e))?;
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

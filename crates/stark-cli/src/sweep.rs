@@ -303,6 +303,14 @@ fn collect(case: &Case, plan: &SweepPlan) -> stark::Result<CaseResult> {
         lab_outcome,
     };
     std::fs::create_dir_all(&plan.results).map_err(|e| bad(format!("{}: {e}", plan.results.display())))?;
+    // The run's pictures go with its result (small PNGs, meant to be committed).
+    for kind in ["motors", "final"] {
+        let png = dir.join(format!("{name}.{kind}.png"));
+        if png.exists() {
+            let to = plan.results.join(format!("{}.{kind}.png", case.name));
+            std::fs::copy(&png, &to).map_err(|e| bad(format!("{}: {e}", to.display())))?;
+        }
+    }
     let path = plan.result_path(case);
     let text = serde_json::to_string_pretty(&result).expect("serialisable");
     std::fs::write(&path, text + "\n").map_err(|e| bad(format!("{}: {e}", path.display())))?;

@@ -447,6 +447,10 @@ impl Simulation {
             line.insert("time_s".into(), time_s.into());
             line.insert(p.name.clone(), (p.record)(self));
             result = write_line(&mut p.log, "probe log", &line);
+            // Flushed every step: scenes read their probes while running (outcomes, plots).
+            if let (Ok(()), Some(log)) = (&result, &mut p.log) {
+                result = log.flush().map_err(|e| io_err(Path::new("probe log"), e));
+            }
             if result.is_err() {
                 break;
             }
