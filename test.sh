@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The project's test command (README "Two commands", .ci/run): the Rust workspace's tests, then
-# the Python module's: a virtualenv in target/pyenv with maturin, NumPy, pytest and meshio
+# the Python module's: a virtualenv in target/pyenv with maturin, NumPy, pytest, meshio and Ray
 # (installed once), the `starkrs` extension built in release mode into it, and its pytest suite;
 # then, if a Chromium is installed, the HTML viewer in a headless browser.
 set -euo pipefail
@@ -13,8 +13,8 @@ venv="$PWD/target/pyenv"
 if [ ! -x "$venv/bin/python" ]; then
     "${PYTHON:-python3}" -m venv "$venv"
 fi
-if [ ! -x "$venv/bin/maturin" ] || ! "$venv/bin/python" -c "import numpy, pytest, meshio" 2>/dev/null; then
-    "$venv/bin/python" -m pip install --quiet --disable-pip-version-check "maturin>=1.8,<2" "numpy>=1.21" "pytest>=7" "meshio>=5"
+if [ ! -x "$venv/bin/maturin" ] || ! "$venv/bin/python" -c "import numpy, pytest, meshio, ray" 2>/dev/null; then
+    "$venv/bin/python" -m pip install --quiet --disable-pip-version-check "maturin>=1.8,<2" "numpy>=1.21" "pytest>=7" "meshio>=5" "ray>=2.9"
 fi
 VIRTUAL_ENV="$venv" "$venv/bin/maturin" develop --release --quiet -m crates/stark-python/Cargo.toml
 "$venv/bin/python" -m pytest -q crates/stark-python/tests

@@ -397,7 +397,11 @@ pub fn picture(meshes: &[PictureMesh], title: &str, region: Option<[[f64; 3]; 2]
     let (top, side) = root.split_vertically(top_h);
     let views: [(&DrawingArea<_, _>, usize, String); 2] = [
         (&top, 0, "top view: y (driving direction) → right, x ↑".to_string()),
-        (&side, 2, format!("side view: y → right, z ↑ (z stretched {z_stretch:.1}×)")),
+        (
+            &side,
+            2,
+            format!("side view: y → right, z ↑ (z stretched {z_stretch:.1}×)"),
+        ),
     ];
     for (area, k, caption) in views {
         let mut chart = ChartBuilder::on(area)
@@ -417,11 +421,10 @@ pub fn picture(meshes: &[PictureMesh], title: &str, region: Option<[[f64; 3]; 2]
         for (i, m) in meshes.iter().enumerate() {
             let color = Palette99::pick(i).to_rgba();
             let inside = |q: &[f64; 3]| (0..3).all(|c| q[c] >= lo[c] - 1e-9 && q[c] <= hi[c] + 1e-9);
-            let segments = m
-                .edges
-                .iter()
-                .filter(|e| inside(&e[0]) && inside(&e[1]))
-                .map(move |e| PathElement::new(vec![(e[0][1], e[0][k]), (e[1][1], e[1][k])], color.stroke_width(1)));
+            let segments =
+                m.edges.iter().filter(|e| inside(&e[0]) && inside(&e[1])).map(move |e| {
+                    PathElement::new(vec![(e[0][1], e[0][k]), (e[1][1], e[1][k])], color.stroke_width(1))
+                });
             let s = chart.draw_series(segments).map_err(|e| plot_err(png, e))?;
             if k == 0 {
                 s.label(m.label.clone())

@@ -165,17 +165,16 @@ pub fn cases(file: &Path) -> stark::Result<(Vec<Case>, SweepPlan)> {
         }
         let stem = match &scene {
             SceneRef::Builtin(n) => n.clone(),
-            SceneRef::File(p) => p.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default(),
+            SceneRef::File(p) => p
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default(),
         };
         let name = match (&scene, name_parts.is_empty()) {
             (_, true) => stem,
             _ => format!("{stem}__{}", name_parts.join("_")),
         };
-        out.push(Case {
-            name,
-            scene,
-            overrides,
-        });
+        out.push(Case { name, scene, overrides });
     }
     Ok((
         out,
@@ -273,7 +272,8 @@ fn spawn(case: &Case, plan: &SweepPlan) -> stark::Result<Child> {
                 .map(Stdio::from)
                 .unwrap_or(Stdio::null()),
         );
-    cmd.spawn().map_err(|e| bad(format!("cannot start case {}: {e}", case.name)))
+    cmd.spawn()
+        .map_err(|e| bad(format!("cannot start case {}: {e}", case.name)))
 }
 
 /// Collect a finished case's result into its result file.
@@ -417,11 +417,7 @@ fn write_summary(cases: &[Case], plan: &SweepPlan) -> stark::Result<()> {
     );
     for r in &results {
         let s = &r.summary;
-        let outcome = r
-            .outcome
-            .as_ref()
-            .and_then(|o| o["outcome"].as_str())
-            .unwrap_or("–");
+        let outcome = r.outcome.as_ref().and_then(|o| o["outcome"].as_str()).unwrap_or("–");
         md.push_str(&format!(
             "| {} | {} | {} | {:.3} | {:.0} | {} | {:.2} | {} | {:.1e} |\n",
             r.case,

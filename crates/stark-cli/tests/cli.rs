@@ -196,7 +196,10 @@ checkpoint_every_s = 0.05
         .map(|case| {
             let text = std::fs::read_to_string(results.join(format!("{case}.json"))).unwrap();
             let r: serde_json::Value = serde_json::from_str(&text).unwrap();
-            assert!((r["summary"]["simulated_time_s"].as_f64().unwrap() - 0.1).abs() < 1e-12, "{r}");
+            assert!(
+                (r["summary"]["simulated_time_s"].as_f64().unwrap() - 0.1).abs() < 1e-12,
+                "{r}"
+            );
             r["summary"]["steps"].as_u64().unwrap()
         })
         .collect();
@@ -227,7 +230,16 @@ fn sweep_resumes_an_interrupted_case_from_its_checkpoint() {
     // A run of the case's first 0.1 s, as an interrupted sweep leaves it.
     let run_dir = dir.path().join("runs/rb_point");
     ok(stark()
-        .args(["run", "--scene", "rb_point", "--duration", "0.1", "--threads", "1", "--quiet"])
+        .args([
+            "run",
+            "--scene",
+            "rb_point",
+            "--duration",
+            "0.1",
+            "--threads",
+            "1",
+            "--quiet",
+        ])
         .args(["--checkpoint-every", "0.05", "--no-frames", "--out"])
         .arg(&run_dir)
         .output()
@@ -237,7 +249,10 @@ fn sweep_resumes_an_interrupted_case_from_its_checkpoint() {
     let r: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.path().join("results/rb_point.json")).unwrap()).unwrap();
     // The summary covers the whole run: 0.2 s, the first half from before the resume.
-    assert!((r["summary"]["simulated_time_s"].as_f64().unwrap() - 0.2).abs() < 1e-9, "{r}");
+    assert!(
+        (r["summary"]["simulated_time_s"].as_f64().unwrap() - 0.2).abs() < 1e-9,
+        "{r}"
+    );
     let log = run_dir.join("rb_point.steps.jsonl");
     let steps = log_lines(&log);
     assert_eq!(steps.len() as u64, r["summary"]["steps"].as_u64().unwrap());

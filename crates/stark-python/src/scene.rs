@@ -207,8 +207,26 @@ fn builtin_scene(py: Python<'_>, name: &str, settings: Option<&Bound<'_, params:
     })
 }
 
+/// Classify a robot–towel run from its probe log (`<out>/<scene>.robot_towel.jsonl`): a dict
+/// with `outcome` ("P", "O" or "S"), `reason`, `robot_advance_m`, `towel_advance_m` and
+/// `mean_torque_fraction`, as `stark run` and `stark sweep` report it.
+#[pyfunction]
+fn classify_robot_towel(py: Python<'_>, log: PathBuf) -> PyResult<Bound<'_, PyAny>> {
+    let c = guarded(|| stark::scenes::kobuki_towel::classify_log(&log))?;
+    let text = serde_json::to_string(&c).map_err(|e| stark_err(e.to_string()))?;
+    py.import("json")?.call_method1("loads", (text,))
+}
+
+/// The lab's outcome (Table I) of a built-in robot–towel scene, or None for other names.
+#[pyfunction]
+fn robot_towel_lab_outcome(name: &str) -> Option<String> {
+    stark::scenes::kobuki_towel::Case::from_name(name).map(|c| c.lab_outcome().to_string())
+}
+
 /// Register the functions and classes.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(classify_robot_towel, m)?)?;
+    m.add_function(wrap_pyfunction!(robot_towel_lab_outcome, m)?)?;
     m.add_class::<Scene>()?;
     m.add_function(wrap_pyfunction!(load_scene, m)?)?;
     m.add_function(wrap_pyfunction!(parse_scene, m)?)?;

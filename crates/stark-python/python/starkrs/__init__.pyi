@@ -1355,3 +1355,11 @@ def builtin_scenes() -> list[dict[str, Any]]:
 
 def builtin_scene(name: str, settings: Optional[Settings] = None) -> Scene:
     """Build the built-in scene `name`; `settings` provides the base settings."""
+
+def classify_robot_towel(log: str | os.PathLike[str]) -> dict[str, Any]:
+    """Classify a robot–towel run from its probe log (`<out>/<scene>.robot_towel.jsonl`): a dict
+    with `outcome` ("P", "O" or "S"), `reason`, `robot_advance_m`, `towel_advance_m` and
+    `mean_torque_fraction`."""
+
+def robot_towel_lab_outcome(name: str) -> Optional[str]:
+    """The lab's outcome (Table I) of a built-in robot–towel scene, or None for other names."""

@@ -288,9 +288,8 @@ impl RobotTowel {
             wheel_speed_rad_s: motor.map(|m| m.coordinate_rate.unwrap_or(0.0)),
             // The slider coordinate is the arm's rise from the URDF zero (0.022 m below the
             // body centre): length = 0.022 − q.
-            suspension_compression_m: suspension.map(|s| {
-                SUSPENSION_REST_LENGTH_M - (SUSPENSION_ZERO_LENGTH_M - s.coordinate.unwrap_or(0.0))
-            }),
+            suspension_compression_m: suspension
+                .map(|s| SUSPENSION_REST_LENGTH_M - (SUSPENSION_ZERO_LENGTH_M - s.coordinate.unwrap_or(0.0))),
             robot_position_m: p.into(),
             robot_yaw_deg: (-forward.x).atan2(forward.y).to_degrees(),
             robot_pitch_deg: forward.z.atan2(forward.xy().norm()).to_degrees(),

@@ -172,7 +172,10 @@ pub fn classify(samples: &[Sample], rules: &Rules) -> Result<Classification, Str
     };
     Ok(result(
         Outcome::Stuck,
-        format!("{why}; mean motor torque {:.0}% of the cap", 100.0 * mean_torque_fraction),
+        format!(
+            "{why}; mean motor torque {:.0}% of the cap",
+            100.0 * mean_torque_fraction
+        ),
     ))
 }
 
@@ -238,7 +241,13 @@ mod tests {
     #[test]
     fn stalled_against_the_towel_is_stuck_at_the_cap() {
         // Stops at the towel at t = 2 s with the motors at their cap.
-        let s = run(6.0, |t| 0.26 * t.min(2.0), |_| 0.8, |t| t > 1.8, |t| if t > 2.0 { 1.0 } else { 0.3 });
+        let s = run(
+            6.0,
+            |t| 0.26 * t.min(2.0),
+            |_| 0.8,
+            |t| t > 1.8,
+            |t| if t > 2.0 { 1.0 } else { 0.3 },
+        );
         let c = classify(&s, &Rules::default()).unwrap();
         assert_eq!(c.outcome, Outcome::Stuck, "{}", c.reason);
         assert!(c.reason.contains("100% of the cap"), "{}", c.reason);
