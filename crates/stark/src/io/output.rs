@@ -533,6 +533,33 @@ mod tests {
     }
 
     #[test]
+    fn probes_are_logged_every_step_and_continue_on_resume() {
+        let dir = tempfile::tempdir().unwrap();
+        let ball_height = |sim: &Simulation| sim.body_states()[1].1.position_m[2];
+        let mut sim = pendulum(dir.path(), |_| {});
+        sim.add_probe("ball_z", move |sim| ball_height(sim)).unwrap();
+        let bad = sim.add_probe("ball_z", |_| 0.0).unwrap_err().to_string();
+        assert!(bad.contains("unique"), "{bad}");
+        assert!(sim.add_probe("a/b", |_| 0.0).is_err());
+        sim.run(2.0 / 30.0).unwrap();
+        let ckpt = dir.path().join("p.ckpt");
+        sim.save_checkpoint(&ckpt).unwrap();
+        sim.run(2.0 / 30.0).unwrap();
+        let log = dir.path().join("pendulum.ball_z.jsonl");
+        let full = lines(&log);
+        assert_eq!(full.len(), 4);
+        assert_eq!(full[3]["step"], 3);
+        assert_eq!(full[3]["ball_z"].as_f64().unwrap(), ball_height(&sim));
+
+        // A resumed run cuts the log back to the checkpoint and continues it identically.
+        let mut resumed = pendulum(dir.path(), |_| {});
+        resumed.add_probe("ball_z", move |sim| ball_height(sim)).unwrap();
+        resumed.restore_checkpoint(&ckpt).unwrap();
+        resumed.run(2.0 / 30.0).unwrap();
+        assert_eq!(lines(&log), full);
+    }
+
+    #[test]
     fn bodies_and_joints_are_logged_every_step() {
         let dir = tempfile::tempdir().unwrap();
         let mut sim = pendulum(dir.path(), |_| {});
