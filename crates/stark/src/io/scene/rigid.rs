@@ -1473,6 +1473,40 @@ gravity_m_s2 = [0.0, 0.0, 0.0]
         assert!(states[2].1.coordinate.is_some());
     }
 
+    /// The scene's joints are what the loader built before `[[joint]]` deserialised into
+    /// `JointKind` (issue 12): elements and registered joints, printed with `{:?}`, stored from
+    /// the code before the change.
+    #[test]
+    fn every_joint_type_builds_what_it_built_before_joint_kind() {
+        let scene = parse(&all_joints_scene());
+        let mut now = String::new();
+        for (i, e) in scene
+            .simulation
+            .rigid_bodies
+            .joints
+            .potential
+            .elements
+            .iter()
+            .enumerate()
+        {
+            now += &format!("element {i}: {e:?}\n");
+        }
+        for h in &scene.simulation.rigid_bodies.named_joints {
+            now += &format!("joint: {h:?}\n");
+        }
+        let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("src/rigidbodies/joints/testdata/scene_joints_built_before_joint_kind.txt");
+        if std::env::var_os("STARK_WRITE_GOLDEN").is_some() {
+            std::fs::write(&path, &now).unwrap();
+        }
+        let before = std::fs::read_to_string(&path).unwrap();
+        let (now, before): (Vec<_>, Vec<_>) = (now.lines().collect(), before.lines().collect());
+        assert_eq!(now.len(), before.len());
+        for (n, b) in now.iter().zip(&before) {
+            assert_eq!(n, b);
+        }
+    }
+
     #[test]
     fn joint_names_default_and_must_be_unique() {
         let base = "duration_s = 1.0\n[[rigid_body]]\nname = \"a\"\nsphere = { radius_m = 0.1 }\nmass_kg = 1.0\n\

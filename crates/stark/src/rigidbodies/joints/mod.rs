@@ -10,6 +10,8 @@
 //! (the generalised forces on the body's velocity DOFs, see [`JointReadout`]).
 
 pub mod coupling;
+#[cfg(test)]
+mod old_paths_test;
 pub mod primitives;
 
 use crate::energy::potential::{dual_derivatives, Potential, Stencil};
