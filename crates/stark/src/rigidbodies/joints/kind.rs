@@ -383,26 +383,39 @@ impl JointKind {
         self.clone().target().map(|(field, _, target)| (field, target))
     }
 
+    /// The names of every joint type, from its serde form.
+    pub fn type_names() -> Vec<String> {
+        // A type no joint has: the error lists the types.
+        expected_names(&probe(serde_json::json!({ "type": "\u{1}" })))
+    }
+
     /// The fields of the joint type `type_name` (besides `type`), from its serde form: `None`
     /// if there is no such type.
     pub fn fields_of(type_name: &str) -> Option<Vec<String>> {
-        // A field no type has: the error lists the fields the type expects.
-        let probe = serde_json::json!({ "type": type_name, "\u{1}": 0 });
-        let message = match serde_json::from_value::<JointKind>(probe) {
-            Err(e) => e.to_string(),
-            Ok(_) => return None,
-        };
-        if message.contains("unknown variant") {
+        if !Self::type_names().iter().any(|t| t == type_name) {
             return None;
         }
-        Some(match message.split_once("expected one of ") {
-            Some((_, list)) => list.split(", ").map(|f| f.trim_matches('`').to_string()).collect(),
-            // "expected `point_m`" (one field) or "there are no fields".
-            None => match message.split_once("expected `") {
-                Some((_, f)) => vec![f.split('`').next().unwrap_or_default().to_string()],
-                None => Vec::new(),
-            },
-        })
+        // A field no type has: the error lists the fields the type takes ("there are no
+        // fields" lists none).
+        Some(expected_names(&probe(
+            serde_json::json!({ "type": type_name, "\u{1}": 0 }),
+        )))
+    }
+}
+
+/// The error message of deserialising `value` as a [`JointKind`] (empty if it is one).
+fn probe(value: serde_json::Value) -> String {
+    serde_json::from_value::<JointKind>(value)
+        .err()
+        .map(|e| e.to_string())
+        .unwrap_or_default()
+}
+
+/// The names in backticks after "expected" in a serde error message.
+fn expected_names(message: &str) -> Vec<String> {
+    match message.split_once("expected") {
+        Some((_, rest)) => rest.split('`').skip(1).step_by(2).map(str::to_string).collect(),
+        None => Vec::new(),
     }
 }
 
@@ -534,12 +547,14 @@ impl Simulation {
         let b = match (b, acts_on_joints) {
             (Some(b), _) => Some(b),
             (None, true) => None,
-            (None, false) => return Err(invalid(
-                label,
-                format_args!(
+            (None, false) => {
+                return Err(invalid(
+                    label,
+                    format_args!(
                     "`b` must be a rigid body (a {type_name} joint moves body b relative to a; `a` may be the world)"
                 ),
-            )),
+                ))
+            }
         };
         let l = label;
         // The builder of a joint between a and b (after the checks of its fields).

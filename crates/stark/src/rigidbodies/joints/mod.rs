@@ -617,10 +617,13 @@ impl<'s> Builder<'s> {
                 "joint '{label}' connects the world to itself"
             )));
         }
-        if sa.body.is_some() && sa.body == sb.body {
-            return Err(StarkError::InvalidInput(format!(
-                "joint '{label}' connects a body to itself"
-            )));
+        if let (Some(ia), Some(ib)) = (sa.body, sb.body) {
+            if ia == ib {
+                let name = &sim.rigid_bodies.labels[ia as usize];
+                return Err(StarkError::InvalidInput(format!(
+                    "joint '{label}' connects '{name}' to itself: `b` must be another body than `a`"
+                )));
+            }
         }
         Ok(Builder {
             sim,
