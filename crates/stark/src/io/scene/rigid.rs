@@ -492,18 +492,6 @@ pub(super) struct JointEntry {
     pub(super) kind: JointKind,
 }
 
-/// The fields of a `[[joint]]` besides `type` and those of its type.
-pub(super) const JOINT_FIELDS: [&str; 8] = [
-    "name",
-    "a",
-    "b",
-    "enabled",
-    "target_schedule",
-    "stiffness",
-    "tolerance_m",
-    "tolerance_deg",
-];
-
 impl JointEntry {
     /// The default name: `<type> <a>-<b>` (`<type>` for the couplings, which name joints).
     pub(super) fn default_name(&self) -> String {
