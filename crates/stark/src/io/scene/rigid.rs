@@ -1053,6 +1053,32 @@ gravity_m_s2 = [0.0, 0.0, 0.0]
     }
 
     #[test]
+    fn couplings_name_the_joints_they_couple() {
+        let text = "duration_s = 1.0\n\
+                    [[rigid_body]]\nname = \"a\"\nbox = { size_m = [0.1, 0.1, 0.1] }\nmass_kg = 1.0\n\
+                    [[rigid_body]]\nname = \"b\"\nbox = { size_m = [0.1, 0.1, 0.1] }\nmass_kg = 1.0\nposition_m = [1.0, 0.0, 0.0]\n\
+                    [[joint]]\nname = \"h1\"\ntype = \"hinge\"\nb = \"a\"\npoint_m = [0.0, 0.0, 0.0]\naxis = [0.0, 1.0, 0.0]\n\
+                    [[joint]]\nname = \"h2\"\ntype = \"hinge\"\nb = \"b\"\npoint_m = [1.0, 0.0, 0.0]\naxis = [0.0, 1.0, 0.0]\n\
+                    [[joint]]\ntype = \"joint_coupling\"\njoint_a = \"h1\"\njoint_b = \"h2\"\nmultiplier = -1.0\n\
+                    [[joint]]\ntype = \"joint_spring\"\njoint = \"h1\"\nspring_stiffness = 2.0\ndamping = 0.5\n";
+        let scene = parse(text);
+        let names: Vec<_> = scene.joints.iter().map(|j| j.label.as_str()).collect();
+        assert_eq!(names, ["h1", "h2", "joint_coupling", "joint_spring"]);
+        let elements = &scene.simulation.rigid_bodies.joints.potential.elements;
+        let coupling = &elements[scene.joint("joint_coupling").unwrap().elements[0] as usize];
+        match &coupling.primitive {
+            Primitive::Coupling(c) => assert_eq!((c.multiplier, c.offset, c.hard), (-1.0, 0.0, true)),
+            other => panic!("{other:?}"),
+        }
+        let spring = &elements[scene.joint("joint_spring").unwrap().elements[0] as usize];
+        match &spring.primitive {
+            Primitive::Coupling(c) => assert_eq!((c.damping, c.hard), (0.5, false)),
+            other => panic!("{other:?}"),
+        }
+        assert_eq!(spring.stiffness, 2.0);
+    }
+
+    #[test]
     fn joint_names_default_and_must_be_unique() {
         let base = "duration_s = 1.0\n[[rigid_body]]\nname = \"a\"\nsphere = { radius_m = 0.1 }\nmass_kg = 1.0\n\
                     [[rigid_body]]\nname = \"b\"\nsphere = { radius_m = 0.1 }\nmass_kg = 1.0\nposition_m = [0.0, 0.0, -0.5]\n";
@@ -1312,6 +1338,31 @@ stiffness = 1e5
                 "a joint between a body and itself",
                 format!("{BODIES}{}axis = [0.0, 1.0, 0.0]\n", hinge.replace("a = \"a\"", "a = \"b\"")),
                 vec!["test.toml:18:1: joint 'hinge b-b' connects 'b' to itself"],
+            ),
+            (
+                "misspelt field of a motor",
+                format!("{BODIES}{}axis = [0.0, 1.0, 0.0]\nmax_torque_nm = 1.0\ntarget_velocity_deg_s = 10.0\n", hinge.replace("hinge", "motor")),
+                vec!["=test.toml:21:1: unknown field `max_torque_nm` in joint #1 (motor 'a' to 'b'), expected one of `point_m`, `axis`, `target_velocity_deg_s`, `max_torque_n_m`, `delay_deg_s`, `stiffness`, `tolerance_m`, `tolerance_deg`, `target_schedule`"],
+            ),
+            (
+                "a joint field of the wrong type",
+                format!("{BODIES}{hinge}axis = \"up\"\n"),
+                vec!["test.toml:20:1: `axis`: invalid type: string \"up\"", "in joint #1 (hinge 'a' to 'b') axis"],
+            ),
+            (
+                "a field of the wrong type in a joint with a typo in its type",
+                format!("{BODIES}[[joint]]\ntype = \"ball_con\"\nb = \"b\"\n"),
+                vec!["=test.toml:16:8: unknown variant `ball_con` in joint #1 (ball_con 'world' to 'b') type, expected one of `ball`, `ball_cone`"],
+            ),
+            (
+                "a schedule on a joint without a target",
+                format!("{BODIES}{hinge}axis = [0.0, 1.0, 0.0]\ntarget_schedule = [[0.0, 1.0]]\n"),
+                vec!["=test.toml:21:1: a hinge joint has no target to schedule in joint #1 (hinge 'a' to 'b') target_schedule"],
+            ),
+            (
+                "a coupling of an unknown joint",
+                format!("{BODIES}[[joint]]\ntype = \"joint_coupling\"\njoint_a = \"x\"\njoint_b = \"y\"\n"),
+                vec!["test.toml:17:1: joint 'joint_coupling': `joint_a`: no joint is labelled 'x'; the joints are none yet"],
             ),
             (
                 "unknown field in a joint",
