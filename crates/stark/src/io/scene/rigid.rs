@@ -1350,9 +1350,9 @@ stiffness = 1e5
                 vec!["test.toml:20:1: `axis`: invalid type: string \"up\"", "in joint #1 (hinge 'a' to 'b') axis"],
             ),
             (
-                "a field of the wrong type in a joint with a typo in its type",
+                "a typo in a joint type",
                 format!("{BODIES}[[joint]]\ntype = \"ball_con\"\nb = \"b\"\n"),
-                vec!["=test.toml:16:8: unknown variant `ball_con` in joint #1 (ball_con 'world' to 'b') type, expected one of `ball`, `ball_cone`"],
+                vec!["test.toml:16:8: unknown variant `ball_con` in joint #1 (ball_con 'world' to 'b') type, expected one of `ball`, `ball_cone`"],
             ),
             (
                 "a schedule on a joint without a target",

@@ -1069,7 +1069,10 @@ mod tests {
                 limits_m: [-0.1, 0.2],
             },
             PointOnAxis { point_m: p, axis },
-            Planar { point_m: p, normal: axis },
+            Planar {
+                point_m: p,
+                normal: axis,
+            },
             PrismaticPress {
                 point_m: p,
                 axis,
@@ -1167,8 +1170,8 @@ mod tests {
 
     #[test]
     fn optional_fields_take_their_documented_defaults() {
-        let kind: JointKind = toml::from_str("type = \"motor\"\npoint_m = [0, 0, 0]\naxis = [0, 0, 1]\nmax_torque_n_m = 1")
-            .unwrap();
+        let kind: JointKind =
+            toml::from_str("type = \"motor\"\npoint_m = [0, 0, 0]\naxis = [0, 0, 1]\nmax_torque_n_m = 1").unwrap();
         let expected = JointKind::Motor {
             point_m: [0.0; 3],
             axis: [0.0, 0.0, 1.0],
@@ -1177,21 +1180,36 @@ mod tests {
             delay_deg_s: None,
         };
         assert_eq!(kind, expected);
-        let kind: JointKind = serde_json::from_str(r#"{"type": "linear_velocity", "point_m": [0, 0, 0], "axis": [1, 0, 0], "max_force_n": 2}"#)
-            .unwrap();
-        assert!(matches!(kind, JointKind::LinearVelocity { delay_m_s, target_velocity_m_s, .. }
-            if delay_m_s == DEFAULT_CONTROLLER_DELAY && target_velocity_m_s == 0.0));
-        let kind: JointKind = serde_json::from_str(r#"{"type": "joint_coupling", "joint_a": "x", "joint_b": "y"}"#).unwrap();
-        assert!(matches!(kind, JointKind::JointCoupling { multiplier, offset, .. } if multiplier == 1.0 && offset == 0.0));
+        let kind: JointKind = serde_json::from_str(
+            r#"{"type": "linear_velocity", "point_m": [0, 0, 0], "axis": [1, 0, 0], "max_force_n": 2}"#,
+        )
+        .unwrap();
+        assert!(
+            matches!(kind, JointKind::LinearVelocity { delay_m_s, target_velocity_m_s, .. }
+            if delay_m_s == DEFAULT_CONTROLLER_DELAY && target_velocity_m_s == 0.0)
+        );
+        let kind: JointKind =
+            serde_json::from_str(r#"{"type": "joint_coupling", "joint_a": "x", "joint_b": "y"}"#).unwrap();
+        assert!(
+            matches!(kind, JointKind::JointCoupling { multiplier, offset, .. } if multiplier == 1.0 && offset == 0.0)
+        );
         // Unknown fields are errors that list the type's fields.
-        let e = serde_json::from_str::<JointKind>(r#"{"type": "hinge", "point_m": [0, 0, 0], "axis": [0, 0, 1], "limit": 3}"#)
-            .unwrap_err()
-            .to_string();
+        let e = serde_json::from_str::<JointKind>(
+            r#"{"type": "hinge", "point_m": [0, 0, 0], "axis": [0, 0, 1], "limit": 3}"#,
+        )
+        .unwrap_err()
+        .to_string();
         assert!(e.contains("unknown field `limit`, expected `point_m` or `axis`"), "{e}");
         assert_eq!(JointKind::fields_of("fix"), Some(vec![]));
         assert_eq!(
             JointKind::fields_of("spring").unwrap(),
-            ["point_a_m", "point_b_m", "spring_stiffness_n_m", "damping_n_s_m", "limits_m"]
+            [
+                "point_a_m",
+                "point_b_m",
+                "spring_stiffness_n_m",
+                "damping_n_s_m",
+                "limits_m"
+            ]
         );
         assert_eq!(JointKind::fields_of("hing"), None);
     }
@@ -1202,8 +1220,12 @@ mod tests {
         s.output.step_log = false;
         let mut sim = Simulation::new(s).unwrap();
         let q = UnitQuaternion::identity();
-        let a = sim.add_rigid_body("a", 1.0, Matrix3::identity(), Vector3::zeros(), q).unwrap();
-        let b = sim.add_rigid_body("b", 1.0, Matrix3::identity(), Vector3::new(0.0, 0.0, -0.5), q).unwrap();
+        let a = sim
+            .add_rigid_body("a", 1.0, Matrix3::identity(), Vector3::zeros(), q)
+            .unwrap();
+        let b = sim
+            .add_rigid_body("b", 1.0, Matrix3::identity(), Vector3::new(0.0, 0.0, -0.5), q)
+            .unwrap();
         (sim, a, b)
     }
 
@@ -1250,7 +1272,10 @@ mod tests {
         let e = err(&mut sim, Some(a), None, hinge);
         assert!(e.contains("joint 'j': `b` must be a rigid body"), "{e}");
         let e = err(&mut sim, Some(a), Some(b), JointKind::Fix {});
-        assert!(e.contains("joint 'j': a fix joint holds body b in the world: `a` must be the world"), "{e}");
+        assert!(
+            e.contains("joint 'j': a fix joint holds body b in the world: `a` must be the world"),
+            "{e}"
+        );
         let motor = JointKind::Motor {
             point_m: [0.0; 3],
             axis: [0.0, 0.0, 1.0],
@@ -1269,7 +1294,10 @@ mod tests {
         let e = err(&mut sim, Some(a), None, spring.clone());
         assert!(e.contains("`a` and `b` must be None"), "{e}");
         let e = err(&mut sim, None, None, spring.clone());
-        assert!(e.contains("joint 'j': `joint`: no joint is labelled 'pivot'; the joints are none yet"), "{e}");
+        assert!(
+            e.contains("joint 'j': `joint`: no joint is labelled 'pivot'; the joints are none yet"),
+            "{e}"
+        );
         sim.add_ball_joint("ball", None, b, Vector3::zeros(), p).unwrap();
         let e = err(&mut sim, None, None, spring);
         assert!(e.contains("the joints are 'ball'"), "{e}");
@@ -1296,11 +1324,16 @@ mod tests {
         let types = JointKind::type_names();
         let mut listed = Vec::new();
         for line in section.lines() {
-            let cells: Vec<&str> = line.split(" | ").collect();
-            let Some(t) = cells[0].strip_prefix("| `").and_then(|c| c.strip_suffix('`')) else {
+            // `| type | required | optional | call |`: cells 1 to 4.
+            let cells: Vec<&str> = line.split('|').map(str::trim).collect();
+            if cells.len() < 5 {
+                continue;
+            }
+            let cells = &cells[1..];
+            let Some(t) = cells[0].strip_prefix('`').and_then(|c| c.strip_suffix('`')) else {
                 continue;
             };
-            if !types.iter().any(|x| x == t) || cells.len() < 4 {
+            if !types.iter().any(|x| x == t) {
                 continue;
             }
             let fields = JointKind::fields_of(t).unwrap();
@@ -1318,6 +1351,9 @@ mod tests {
             }
             listed.push(t.to_string());
         }
-        assert_eq!(listed, types, "docs: the types table lists other types or another order");
+        assert_eq!(
+            listed, types,
+            "docs: the types table lists other types or another order"
+        );
     }
 }
