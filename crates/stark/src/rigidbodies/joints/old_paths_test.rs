@@ -132,6 +132,9 @@ fn every_add_constructor_builds_what_it_built_before_add_joint() {
     if std::env::var_os("STARK_WRITE_GOLDEN").is_some() {
         std::fs::write(&path, &now).unwrap();
     }
+    if let Some(out) = std::env::var_os("STARK_WRITE_NOW") {
+        std::fs::write(out, &now).unwrap();
+    }
     let before = std::fs::read_to_string(&path).unwrap();
     let (now, before): (Vec<_>, Vec<_>) = (now.lines().collect(), before.lines().collect());
     assert_eq!(now.len(), before.len());
