@@ -11,7 +11,7 @@ use crate::simulation::{attachment_params_arg, Simulation};
 use nalgebra::{UnitQuaternion, Vector3};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use stark::rigidbodies::joints::{JointHandle, JointReadout, Primitive, DEFAULT_CONTROLLER_DELAY};
+use stark::rigidbodies::joints::{JointHandle, JointKind, JointReadout, Primitive, DEFAULT_CONTROLLER_DELAY};
 use stark::rigidbodies::RigidBodyHandle;
 
 /// A joint: returned by the `Simulation.add_*` joint methods and taken by the joint setters
@@ -946,4 +946,56 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<JointState>()?;
     m.add_class::<RigidObject>()?;
     Ok(())
+}
+
+/// A `JointKind` from a dict with the fields of a scene file's `[[joint]]` type (through JSON, so
+/// that serde names a misspelt field; NumPy arrays are read as lists).
+fn joint_kind(py: Python<'_>, label: &str, kind: &Bound<'_, PyAny>) -> PyResult<JointKind> {
+    let as_list = pyo3::types::PyCFunction::new_closure(
+        py,
+        None,
+        None,
+        |args: &Bound<'_, pyo3::types::PyTuple>, _: Option<&Bound<'_, PyDict>>| -> PyResult<Py<PyAny>> {
+            Ok(args.get_item(0)?.call_method0("tolist")?.unbind())
+        },
+    )?;
+    let kwargs = PyDict::new(py);
+    kwargs.set_item("default", as_list)?;
+    let json: String = py
+        .import("json")?
+        .getattr("dumps")?
+        .call((kind,), Some(&kwargs))?
+        .extract()?;
+    serde_json::from_str(&json).map_err(|e| {
+        let text = e.to_string();
+        let message = text.rsplit_once(" at line ").map_or(text.as_str(), |(m, _)| m);
+        pyo3::exceptions::PyValueError::new_err(format!("joint '{label}': kind: {message}"))
+    })
+}
+
+#[pymethods]
+impl Simulation {
+    /// Add a joint of any kind (the library's `add_joint`): `kind` is a dict with `type` and the
+    /// fields of that type as a scene file's `[[joint]]` spells them (docs/scene-format.md),
+    /// e.g. `{"type": "hinge", "point_m": [0, 0, 0], "axis": [0, 1, 0]}` or
+    /// `{"type": "motor", ..., "target_velocity_deg_s": 90, "max_torque_n_m": 1}`. `a` may be
+    /// None (the world); `a` and `b` are None for the couplings (`joint_coupling`,
+    /// `joint_spring`), which name their joints by label. A misspelt or missing field is a
+    /// ValueError naming it.
+    #[pyo3(signature = (label, a, b, kind, params=None))]
+    fn add_joint(
+        &self,
+        py: Python<'_>,
+        label: &str,
+        a: Option<BodyArg>,
+        b: Option<BodyArg>,
+        kind: &Bound<'_, PyAny>,
+        params: Option<&Bound<'_, params::JointParams>>,
+    ) -> PyResult<Joint> {
+        let kind = joint_kind(py, label, kind)?;
+        let p = joint_params_arg(py, params)?;
+        let (a, b) = (self.a_body(&a)?, self.a_body(&b)?);
+        let h = self.with(|s| s.add_joint(label, a, b, kind, p))?;
+        Ok(self.joint_out(h))
+    }
 }

@@ -1197,6 +1197,15 @@ class Simulation:
         max_force_n: float, response_time_s: float, params: Optional[JointParams] = None,
     ) -> Joint:
         """Prismatic servo: moves to `target_m` (relative to now) along `axis` with at most `max_force_n`."""
+    def add_joint(
+        self, label: str, a: Optional[_HasBody], b: Optional[_HasBody], kind: dict[str, Any],
+        params: Optional[JointParams] = None,
+    ) -> Joint:
+        """Any joint, motor, servo, controller or coupling from one dict: `type` and the fields of
+        that type as a scene file's `[[joint]]` spells them (docs/scene-format.md), e.g.
+        `{"type": "hinge", "point_m": [0, 0, 0], "axis": [0, 1, 0]}`. `a` None is the world;
+        `a` and `b` are None for `joint_coupling` and `joint_spring`, which name their joints by
+        label. A misspelt or missing field is a ValueError naming it."""
     def joints(self) -> list[Joint]:
         """Every joint made so far, in creation order."""
     def joint(self, label: str) -> Optional[Joint]:

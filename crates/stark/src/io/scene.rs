@@ -35,7 +35,7 @@
 //!   ([`Simulation::add_rigid_collision_mesh`] when it has a contact thickness, else
 //!   [`Simulation::add_rigid_output_mesh`]); `fixed = true` adds a fix joint, which a `motion`
 //!   or `keyframes` drive. `[[joint]]` calls the joint constructor of its `type` between body
-//!   `a` (or `"world"`) and body `b` ([`JointType`]). Rigid bodies count as objects: friction,
+//!   `a` (or `"world"`) and body `b` ([`JointKind`](crate::rigidbodies::joints::JointKind)). Rigid bodies count as objects: friction,
 //!   disabled collisions and attachments (to the vertices of their meshes) may name them.
 //!
 //! Every error is a [`SceneError`] naming the file, the line and column where they are known
@@ -68,7 +68,7 @@
 mod rigid;
 mod robot;
 
-pub use rigid::{JointType, SceneRigidBody};
+pub use rigid::SceneRigidBody;
 
 use crate::contact::ContactHandle;
 use crate::deformables::{AttachmentHandle, AttachmentParams, PrescribedHandle, PrescribedParams};
@@ -79,7 +79,7 @@ use crate::presets::meshes;
 use crate::presets::{
     LineHandle, LineMaterial, ObstacleHandle, SurfaceHandle, SurfaceMaterial, VolumeHandle, VolumeMaterial,
 };
-use crate::rigidbodies::joints::JointHandle;
+use crate::rigidbodies::joints::{JointHandle, JointKind};
 use crate::rigidbodies::{Shape, ShapeError};
 use crate::simulation::Simulation;
 use crate::solver::Settings;
@@ -883,6 +883,27 @@ impl Tree<'_> {
         }
     }
 
+    /// Whether entry `index` of `kind` gives the field `key`.
+    fn item_has(&self, kind: &str, index: usize, key: &str) -> bool {
+        match self {
+            Tree::Toml(doc) => (|| {
+                doc.get(kind)?
+                    .get_ref()
+                    .as_array()?
+                    .get(index)?
+                    .get_ref()
+                    .as_table()?
+                    .get(key)
+            })()
+            .is_some(),
+            Tree::Json(v) => v
+                .get(kind)
+                .and_then(|k| k.get(index))
+                .and_then(|e| e.get(key))
+                .is_some(),
+        }
+    }
+
     /// The strings of an array field of an entry (`None` unless every item is a string).
     fn item_strs(&self, kind: &str, index: usize, key: &str) -> Option<Vec<String>> {
         match self {
@@ -993,6 +1014,21 @@ impl Ctx<'_> {
         span
     }
 
+    /// Span of the value at `at` (an entry's field).
+    fn value_span(&self, at: &At) -> Option<Range<usize>> {
+        let (Tree::Toml(doc), [Seg::Key(kind), Seg::Index(i), Seg::Key(key)]) = (&self.tree, &at.0[..]) else {
+            return None;
+        };
+        let entry = doc
+            .get(kind.as_str())?
+            .get_ref()
+            .as_array()?
+            .get(*i)?
+            .get_ref()
+            .as_table()?;
+        entry.get(key.as_str()).map(|v| v.span())
+    }
+
     fn entry_label(&self, kind: &str, index: usize) -> String {
         let field = |k: &str| self.tree.item_str(kind, index, k);
         let n = index + 1;
@@ -1042,6 +1078,14 @@ impl Ctx<'_> {
         out
     }
 
+    /// Whether the entry at `at` (`[kind, index]`) gives the field `key`.
+    fn gives(&self, at: &At, key: &str) -> bool {
+        match &at.0[..] {
+            [Seg::Key(kind), Seg::Index(i), ..] => self.tree.item_has(kind, *i, key),
+            _ => false,
+        }
+    }
+
     /// An error at `at`; for "unknown field `x`" the path names the table holding `x`.
     fn err(&self, at: &At, message: impl Into<String>) -> SceneError {
         let message = message.into();
@@ -1078,12 +1122,82 @@ impl Ctx<'_> {
                 }
             }
         }
-        let mut err = self.err(&At(path), e.message().trim_end());
+        let mut message = e.message().trim_end().to_string();
+        if let [Seg::Key(kind), Seg::Index(i)] = &path[..] {
+            if kind == "joint" {
+                if let Some((key, m)) = self.joint_culprit(*i, &message) {
+                    // At the key, or at the value of an unknown `type`.
+                    let at = At(vec![Seg::Key("joint".into()), Seg::Index(*i), Seg::Key(key.clone())]);
+                    let span = match key.as_str() {
+                        "type" if m.starts_with("unknown variant") => self.value_span(&at),
+                        _ => self.span_of(&at),
+                    };
+                    line_column = span.map(|s| line_col(self.text, s.start));
+                    path.push(Seg::Key(key));
+                    message = m;
+                }
+            }
+        }
+        let at = At(path);
+        let mut err = self.err(&at, message);
         if let Some((line, column)) = line_column {
             err.line = Some(line);
             err.column = Some(column);
         }
         err
+    }
+
+    /// The field of `[[joint]]` `index` that a deserialisation error is about, and a message
+    /// naming it. A joint's type and fields are a flattened, internally tagged `JointKind`,
+    /// deserialised from a buffer that has lost the fields' places: unknown and missing fields
+    /// are named in the message; any other error is traced to the field whose removal changes
+    /// it (the entry is deserialised again without each field in turn).
+    fn joint_culprit(&self, index: usize, message: &str) -> Option<(String, String)> {
+        let type_name = self.tree.item_str("joint", index, "type");
+        let ticked =
+            |m: &str, prefix: &str| -> Option<String> { m.strip_prefix(prefix)?.split('`').next().map(str::to_string) };
+        let fields = |t: &str| JointKind::fields_of(t).unwrap_or_default();
+        let list = |v: &[String]| v.iter().map(|f| format!("`{f}`")).collect::<Vec<_>>().join(", ");
+        if let Some(field) = ticked(message, "unknown field `") {
+            let t = type_name.unwrap_or_default();
+            let mut takes = fields(&t);
+            let driven = takes.iter().any(|f| f.starts_with("target_"));
+            takes.extend(["stiffness", "tolerance_m", "tolerance_deg"].map(String::from));
+            if driven {
+                takes.push("target_schedule".into());
+            }
+            let elsewhere = JointKind::type_names().iter().any(|o| fields(o).contains(&field));
+            let m = if elsewhere {
+                format!("`{field}` does not apply to a {t} joint, which takes {}", list(&takes))
+            } else {
+                format!("unknown field `{field}`, expected one of {}", list(&takes))
+            };
+            return Some((field, m));
+        }
+        if message.starts_with("unknown variant `") {
+            return Some(("type".into(), message.to_string()));
+        }
+        if let Some(field) = ticked(message, "missing field `") {
+            if field == "type" {
+                return None;
+            }
+            let t = type_name.unwrap_or_default();
+            let m = format!("a {t} joint needs `{field}` (it takes {})", list(&fields(&t)));
+            return Some(("type".into(), m));
+        }
+        // Deserialise the entry again without each of its fields.
+        let doc: toml::Table = toml::from_str(self.text).ok()?;
+        let entry = doc.get("joint")?.as_array()?.get(index)?.as_table()?.clone();
+        let fails_alike = |t: toml::Table| match toml::Value::Table(t).try_into::<rigid::JointEntry>() {
+            Ok(_) => false,
+            Err(e) => e.message().trim_end() == message,
+        };
+        let key = entry.keys().find(|k| {
+            let mut without = entry.clone();
+            without.remove(*k);
+            !fails_alike(without)
+        })?;
+        Some((key.clone(), format!("`{key}`: {message}")))
     }
 
     /// A library error raised while building the entry at `at`.

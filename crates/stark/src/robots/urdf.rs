@@ -33,7 +33,7 @@
 //!   every other pair does ([`RobotOptions::adjacent_links_collide`], [`RobotOptions::self_collision`]).
 
 use crate::error::{Result, StarkError};
-use crate::rigidbodies::joints::{JointHandle, JointParams, DEFAULT_CONTROLLER_DELAY};
+use crate::rigidbodies::joints::{JointHandle, JointKind, JointParams, DEFAULT_CONTROLLER_DELAY};
 use crate::rigidbodies::{RigidBodyHandle, RigidMeshHandle, Shape};
 use crate::simulation::Simulation;
 use nalgebra::{Isometry3, Matrix3, Translation3, Unit, UnitQuaternion, Vector3};
@@ -979,7 +979,8 @@ impl Simulation {
             let main = match j.joint_type {
                 urdf_rs::JointType::Revolute | urdf_rs::JointType::Continuous | urdf_rs::JointType::Prismatic => {
                     let actuator = o.and_then(|o| o.actuator.clone());
-                    let h = match (&actuator, use_hinge) {
+                    let (point_m, axis_dir) = (point.into(), axis.into());
+                    let kind = match (&actuator, use_hinge) {
                         (
                             Some(Actuator::Motor {
                                 target_rad_s,
@@ -987,34 +988,26 @@ impl Simulation {
                                 delay_rad_s,
                             }),
                             _,
-                        ) => self.add_motor(
-                            &label,
-                            a,
-                            b,
-                            point,
-                            axis,
-                            speed(*target_rad_s),
-                            effort(*max_torque_n_m)?,
-                            delay_rad_s.unwrap_or(DEFAULT_CONTROLLER_DELAY),
-                            params,
-                        ),
+                        ) => JointKind::Motor {
+                            point_m,
+                            axis: axis_dir,
+                            target_velocity_deg_s: speed(*target_rad_s).to_degrees(),
+                            max_torque_n_m: effort(*max_torque_n_m)?,
+                            delay_deg_s: delay_rad_s.map(f64::to_degrees),
+                        },
                         (
                             Some(Actuator::Press {
                                 target_m_s,
                                 max_force_n,
                             }),
                             _,
-                        ) => self.add_prismatic_press(
-                            &label,
-                            a,
-                            b,
-                            point,
-                            axis,
-                            speed(*target_m_s),
-                            effort(*max_force_n)?,
-                            DEFAULT_CONTROLLER_DELAY,
-                            params,
-                        ),
+                        ) => JointKind::PrismaticPress {
+                            point_m,
+                            axis: axis_dir,
+                            target_velocity_m_s: speed(*target_m_s),
+                            max_force_n: effort(*max_force_n)?,
+                            delay_m_s: DEFAULT_CONTROLLER_DELAY,
+                        },
                         (
                             Some(Actuator::Servo {
                                 target,
@@ -1022,17 +1015,13 @@ impl Simulation {
                                 response_time_s,
                             }),
                             true,
-                        ) => self.add_hinge_servo(
-                            &label,
-                            a,
-                            b,
-                            point,
-                            axis,
-                            (target - q0).to_degrees(),
-                            effort(*max_effort)?,
-                            *response_time_s,
-                            params,
-                        ),
+                        ) => JointKind::HingeServo {
+                            point_m,
+                            axis: axis_dir,
+                            target_deg: (target - q0).to_degrees(),
+                            max_torque_n_m: effort(*max_effort)?,
+                            response_time_s: *response_time_s,
+                        },
                         (
                             Some(Actuator::Servo {
                                 target,
@@ -1040,71 +1029,95 @@ impl Simulation {
                                 response_time_s,
                             }),
                             false,
-                        ) => self.add_prismatic_servo(
-                            &label,
-                            a,
-                            b,
-                            point,
-                            axis,
-                            target - q0,
-                            effort(*max_effort)?,
-                            *response_time_s,
-                            params,
-                        ),
-                        (_, true) => self.add_hinge_joint(&label, a, b, point, axis, params),
-                        (_, false) => self.add_prismatic_joint(&label, a, b, point, axis, params),
-                    }
-                    .map_err(located)?;
+                        ) => JointKind::PrismaticServo {
+                            point_m,
+                            axis: axis_dir,
+                            target_m: target - q0,
+                            max_force_n: effort(*max_effort)?,
+                            response_time_s: *response_time_s,
+                        },
+                        (_, true) => JointKind::Hinge {
+                            point_m,
+                            axis: axis_dir,
+                        },
+                        (_, false) => JointKind::Prismatic {
+                            point_m,
+                            axis: axis_dir,
+                        },
+                    };
+                    let h = self.add_joint(&label, a, Some(b), kind, params).map_err(located)?;
                     let limited = j.joint_type != urdf_rs::JointType::Continuous && j.limit.lower < j.limit.upper;
                     if limited {
                         let (lo, hi) = (j.limit.lower - q0, j.limit.upper - q0);
                         let limit_label = format!("{label}.limits");
-                        let lim = if use_hinge {
-                            if hi - lo <= std::f64::consts::TAU {
-                                Some(self.add_hinge_range(&limit_label, a, b, point, axis, lo, hi, params))
-                            } else {
-                                None
-                            }
+                        let range = if !use_hinge {
+                            Some(JointKind::SliderRange {
+                                point_m,
+                                axis: axis_dir,
+                                limits_m: [lo, hi],
+                            })
+                        } else if hi - lo <= std::f64::consts::TAU {
+                            Some(JointKind::HingeRange {
+                                point_m,
+                                axis: axis_dir,
+                                limits_deg: [lo.to_degrees(), hi.to_degrees()],
+                            })
                         } else {
-                            Some(self.add_slider_range(&limit_label, a, b, point, axis, lo, hi, params))
+                            None
                         };
-                        if let Some(lim) = lim {
-                            extra.push(lim.map_err(located)?);
+                        if let Some(range) = range {
+                            extra.push(
+                                self.add_joint(&limit_label, a, Some(b), range, params)
+                                    .map_err(located)?,
+                            );
                         }
                     }
                     let urdf_damping = j.dynamics.as_ref().map_or(0.0, |d| d.damping);
                     let damping = o.and_then(|o| o.damping).unwrap_or(urdf_damping);
-                    match &actuator {
+                    let spring = match &actuator {
                         Some(Actuator::SpringDamper {
                             stiffness,
                             rest,
                             damping: d,
-                        }) => extra.push(
-                            self.add_joint_spring(&format!("{label}.spring"), &h, *stiffness, rest - q0, d + damping)
+                        }) => Some(("spring", *stiffness, rest - q0, d + damping)),
+                        _ if damping > 0.0 => Some(("damping", 0.0, 0.0, damping)),
+                        _ => None,
+                    };
+                    if let Some((what, spring_stiffness, rest, damping)) = spring {
+                        let kind = JointKind::JointSpring {
+                            joint: h.label.clone(),
+                            spring_stiffness,
+                            rest,
+                            damping,
+                        };
+                        let spring_label = format!("{label}.{what}");
+                        let params = JointParams::default();
+                        extra.push(
+                            self.add_joint(&spring_label, None, None, kind, params)
                                 .map_err(located)?,
-                        ),
-                        _ if damping > 0.0 => extra.push(
-                            self.add_joint_spring(&format!("{label}.damping"), &h, 0.0, 0.0, damping)
-                                .map_err(located)?,
-                        ),
-                        _ => {}
+                        );
                     }
                     Some(h)
                 }
                 urdf_rs::JointType::Fixed => {
                     // Not merged (merge_fixed_joints off): glue the two bodies.
-                    match a {
-                        Some(a) => Some(self.add_attachment_joint(&label, a, b, params).map_err(located)?),
-                        None => Some(self.add_fix_joint(&label, b, params).map_err(located)?),
-                    }
+                    let kind = match a {
+                        Some(_) => JointKind::Attachment {},
+                        None => JointKind::Fix {},
+                    };
+                    Some(self.add_joint(&label, a, Some(b), kind, params).map_err(located)?)
                 }
                 urdf_rs::JointType::Floating => None,
-                urdf_rs::JointType::Planar => Some(
-                    self.add_planar_joint(&label, a, b, point, axis, params)
-                        .map_err(located)?,
-                ),
+                urdf_rs::JointType::Planar => {
+                    let kind = JointKind::Planar {
+                        point_m: point.into(),
+                        normal: axis.into(),
+                    };
+                    Some(self.add_joint(&label, a, Some(b), kind, params).map_err(located)?)
+                }
                 urdf_rs::JointType::Spherical => {
-                    Some(self.add_ball_joint(&label, a, b, point, params).map_err(located)?)
+                    let kind = JointKind::Ball { point_m: point.into() };
+                    Some(self.add_joint(&label, a, Some(b), kind, params).map_err(located)?)
                 }
             };
             if let Some(h) = main {
@@ -1129,21 +1142,22 @@ impl Simulation {
             let q0b = initial_positions.get(&j.name).copied().unwrap_or(0.0);
             // URDF: q_b = m·q_a + c in URDF coordinates; the joints measure from their start.
             let offset = m.offset.unwrap_or(0.0) + multiplier * q0a - q0b;
+            let kind = JointKind::JointCoupling {
+                joint_a: ha.label.clone(),
+                joint_b: hb.label.clone(),
+                multiplier,
+                offset,
+            };
+            let mimic_label = format!("{name}/{}.mimic", j.name);
             let h = self
-                .add_joint_coupling(
-                    &format!("{name}/{}.mimic", j.name),
-                    ha,
-                    hb,
-                    multiplier,
-                    offset,
-                    options.mimic_params,
-                )
+                .add_joint(&mimic_label, None, None, kind, options.mimic_params)
                 .map_err(located)?;
             extra.push(h);
         }
         if options.fixed_base {
             if let Some(body) = body_of_link(root) {
-                extra.push(self.add_fix_joint(&format!("{name}/fixed_base"), body, params)?);
+                let label = format!("{name}/fixed_base");
+                extra.push(self.add_joint(&label, None, Some(body), JointKind::Fix {}, params)?);
             }
         }
         // Contact between the robot's own links.

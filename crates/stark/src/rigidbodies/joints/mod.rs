@@ -10,6 +10,9 @@
 //! (the generalised forces on the body's velocity DOFs, see [`JointReadout`]).
 
 pub mod coupling;
+pub mod kind;
+#[cfg(test)]
+mod old_paths_test;
 pub mod primitives;
 
 use crate::energy::potential::{dual_derivatives, Potential, Stencil};
@@ -19,6 +22,7 @@ use crate::error::{check_param, Result, StarkError};
 use crate::rigidbodies::RigidBodyHandle;
 use crate::simulation::Simulation;
 use crate::state::EvalState;
+pub use kind::{JointKind, JointTarget};
 use nalgebra::{Unit, UnitQuaternion, Vector3};
 pub use primitives::Primitive;
 
@@ -613,10 +617,13 @@ impl<'s> Builder<'s> {
                 "joint '{label}' connects the world to itself"
             )));
         }
-        if sa.body.is_some() && sa.body == sb.body {
-            return Err(StarkError::InvalidInput(format!(
-                "joint '{label}' connects a body to itself"
-            )));
+        if let (Some(ia), Some(ib)) = (sa.body, sb.body) {
+            if ia == ib {
+                let name = &sim.rigid_bodies.labels[ia as usize];
+                return Err(StarkError::InvalidInput(format!(
+                    "joint '{label}' connects '{name}' to itself: `b` must be another body than `a`"
+                )));
+            }
         }
         Ok(Builder {
             sim,
@@ -745,26 +752,22 @@ impl<'s> Builder<'s> {
     }
 }
 
-fn check_controller(label: &str, max: f64, delay: f64) -> Result<()> {
-    check_param(
-        label,
-        "max force/torque",
-        max,
-        max >= 0.0 && max.is_finite(),
-        "must be non-negative",
-    )?;
-    check_param(
-        label,
-        "delay",
-        delay,
-        delay > 0.0 && delay.is_finite(),
-        "must be positive",
-    )
+/// A world vector as a field of [`JointKind`].
+fn arr(v: Vector3<f64>) -> [f64; 3] {
+    v.into()
 }
 
+/// A controller delay in rad/s as [`JointKind`]'s `delay_deg_s` (`None`: the default).
+fn delay_deg_s(delay_rad_s: f64) -> Option<f64> {
+    (delay_rad_s != DEFAULT_CONTROLLER_DELAY).then(|| delay_rad_s.to_degrees())
+}
+
+/// The composite joint constructors: each is [`Simulation::add_joint`] with its [`JointKind`]
+/// (see there for what each joint does). Angles given here in radians are converted to the
+/// kind's degrees.
 impl Simulation {
-    /// Ball joint: body b's point at `point_m` (world, at creation) stays on body a's (a = None:
-    /// the world). 3 rotational DOFs left.
+    /// Ball joint ([`JointKind::Ball`]): body b's point at `point_m` (world, at creation) stays
+    /// on body a's (a = None: the world). 3 rotational DOFs left.
     pub fn add_ball_joint(
         &mut self,
         label: &str,
@@ -773,14 +776,13 @@ impl Simulation {
         point_m: Vector3<f64>,
         params: JointParams,
     ) -> Result<JointHandle> {
-        check_vec(label, "point", &point_m)?;
-        let mut j = Builder::new(self, label, a, Some(b), params)?;
-        j.point(&point_m);
-        Ok(j.finish())
+        let kind = JointKind::Ball { point_m: arr(point_m) };
+        self.add_joint(label, a, Some(b), kind, params)
     }
 
-    /// Ball joint whose relative rotation stays within a cone: the angle between the bodies'
+    /// Ball joint within a cone ([`JointKind::BallCone`]): the angle between the bodies'
     /// copies of `direction` stays below `limit_deg`.
+    #[allow(clippy::too_many_arguments)]
     pub fn add_ball_joint_with_cone_limit(
         &mut self,
         label: &str,
@@ -791,22 +793,16 @@ impl Simulation {
         limit_deg: f64,
         params: JointParams,
     ) -> Result<JointHandle> {
-        check_vec(label, "point", &point_m)?;
-        check_axis(label, &direction)?;
-        check_param(
-            label,
-            "limit_deg",
+        let kind = JointKind::BallCone {
+            point_m: arr(point_m),
+            axis: arr(direction),
             limit_deg,
-            (0.0..=180.0).contains(&limit_deg),
-            "must be in [0, 180]",
-        )?;
-        let mut j = Builder::new(self, label, a, Some(b), params)?;
-        j.point(&point_m);
-        j.angle_limit(&direction, limit_deg.to_radians());
-        Ok(j.finish())
+        };
+        self.add_joint(label, a, Some(b), kind, params)
     }
 
-    /// Body b's point at `point_m` stays on body a's line through `point_m` along `axis`.
+    /// [`JointKind::PointOnAxis`]: body b's point at `point_m` stays on body a's line through
+    /// `point_m` along `axis`.
     pub fn add_point_on_axis_joint(
         &mut self,
         label: &str,
@@ -816,15 +812,15 @@ impl Simulation {
         axis: Vector3<f64>,
         params: JointParams,
     ) -> Result<JointHandle> {
-        check_vec(label, "point", &point_m)?;
-        check_axis(label, &axis)?;
-        let mut j = Builder::new(self, label, a, Some(b), params)?;
-        j.point_on_axis(&point_m, &axis);
-        j.position_measure(&point_m, &axis);
-        Ok(j.finish())
+        let kind = JointKind::PointOnAxis {
+            point_m: arr(point_m),
+            axis: arr(axis),
+        };
+        self.add_joint(label, a, Some(b), kind, params)
     }
 
-    /// The points `point_a_m` of a and `point_b_m` of b keep their current distance.
+    /// [`JointKind::Distance`]: the points `point_a_m` of a and `point_b_m` of b keep their
+    /// current distance.
     pub fn add_distance_joint(
         &mut self,
         label: &str,
@@ -834,21 +830,15 @@ impl Simulation {
         point_b_m: Vector3<f64>,
         params: JointParams,
     ) -> Result<JointHandle> {
-        check_vec(label, "point a", &point_a_m)?;
-        check_vec(label, "point b", &point_b_m)?;
-        let mut j = Builder::new(self, label, a, Some(b), params)?;
-        let nodes = [j.a.point(&point_a_m), j.b.point(&point_b_m)];
-        j.push(
-            Primitive::Distance {
-                target_m: (point_b_m - point_a_m).norm(),
-            },
-            &nodes,
-        );
-        Ok(j.finish())
+        let kind = JointKind::Distance {
+            point_a_m: arr(point_a_m),
+            point_b_m: arr(point_b_m),
+        };
+        self.add_joint(label, a, Some(b), kind, params)
     }
 
-    /// The distance between `point_a_m` of a and `point_b_m` of b stays in `[min_m, max_m]`
-    /// (the current distance must lie inside).
+    /// [`JointKind::DistanceLimits`]: the distance between `point_a_m` of a and `point_b_m` of
+    /// b stays in `[min_m, max_m]` (the current distance must lie inside).
     #[allow(clippy::too_many_arguments)]
     pub fn add_distance_limits(
         &mut self,
@@ -861,21 +851,17 @@ impl Simulation {
         max_m: f64,
         params: JointParams,
     ) -> Result<JointHandle> {
-        let l = (point_b_m - point_a_m).norm();
-        if !(min_m >= 0.0 && min_m <= max_m && l >= min_m - 1e-12 && l <= max_m + 1e-12) {
-            return Err(StarkError::InvalidInput(format!(
-                "joint '{label}': need 0 ≤ min ≤ current distance {l} ≤ max, got [{min_m}, {max_m}]"
-            )));
-        }
-        let mut j = Builder::new(self, label, a, Some(b), params)?;
-        let nodes = [j.a.point(&point_a_m), j.b.point(&point_b_m)];
-        j.push(Primitive::DistanceLimits { min_m, max_m }, &nodes);
-        Ok(j.finish())
+        let kind = JointKind::DistanceLimits {
+            point_a_m: arr(point_a_m),
+            point_b_m: arr(point_b_m),
+            min_m,
+            max_m,
+        };
+        self.add_joint(label, a, Some(b), kind, params)
     }
 
-    /// A damped spring between `point_a_m` of a and `point_b_m` of b, at rest at the current
-    /// distance: stiffness `stiffness_n_m`, damping `damping_n_s_m`. Optionally with distance
-    /// limits `[min, max]` (hard, with `params`).
+    /// [`JointKind::Spring`]: a damped spring between `point_a_m` of a and `point_b_m` of b,
+    /// at rest at the current distance, optionally with hard distance limits `[min, max]`.
     #[allow(clippy::too_many_arguments)]
     pub fn add_spring(
         &mut self,
@@ -889,45 +875,17 @@ impl Simulation {
         limits_m: Option<(f64, f64)>,
         params: JointParams,
     ) -> Result<JointHandle> {
-        check_param(
-            label,
-            "spring stiffness",
-            stiffness_n_m,
-            stiffness_n_m >= 0.0 && stiffness_n_m.is_finite(),
-            "must be non-negative (N/m)",
-        )?;
-        check_param(
-            label,
-            "damping",
+        let kind = JointKind::Spring {
+            point_a_m: arr(point_a_m),
+            point_b_m: arr(point_b_m),
+            spring_stiffness_n_m: stiffness_n_m,
             damping_n_s_m,
-            damping_n_s_m >= 0.0 && damping_n_s_m.is_finite(),
-            "must be non-negative (N·s/m)",
-        )?;
-        let l = (point_b_m - point_a_m).norm();
-        let mut j = Builder::new(self, label, a, Some(b), params)?;
-        let nodes = [j.a.point(&point_a_m), j.b.point(&point_b_m)];
-        let e = j.push(
-            Primitive::Spring {
-                rest_length_m: l,
-                damping_n_s_m,
-            },
-            &nodes,
-        );
-        j.sim.rigid_bodies.joints.potential.elements[e as usize].stiffness = stiffness_n_m;
-        j.driver = Some(e);
-        if let Some((min_m, max_m)) = limits_m {
-            if !(min_m >= 0.0 && min_m <= l && l <= max_m) {
-                return Err(StarkError::InvalidInput(format!(
-                    "joint '{label}': need 0 ≤ min ≤ rest length {l} ≤ max, got [{min_m}, {max_m}]"
-                )));
-            }
-            j.push(Primitive::DistanceLimits { min_m, max_m }, &nodes);
-        }
-        Ok(j.finish())
+            limits_m: limits_m.map(|(min, max)| [min, max]),
+        };
+        self.add_joint(label, a, Some(b), kind, params)
     }
 
-    /// The copies of the unit `direction` in a and b stay aligned (2 rotational DOFs removed;
-    /// with a = None, b's direction keeps its world direction).
+    /// [`JointKind::Direction`]: the copies of `direction` in a and b stay aligned.
     pub fn add_direction_joint(
         &mut self,
         label: &str,
@@ -936,13 +894,12 @@ impl Simulation {
         direction: Vector3<f64>,
         params: JointParams,
     ) -> Result<JointHandle> {
-        check_axis(label, &direction)?;
-        let mut j = Builder::new(self, label, a, Some(b), params)?;
-        j.direction(&direction);
-        Ok(j.finish())
+        let kind = JointKind::Direction { axis: arr(direction) };
+        self.add_joint(label, a, Some(b), kind, params)
     }
 
-    /// The angle between the copies of `direction` in a and b stays below `limit_deg`.
+    /// [`JointKind::AngleLimit`]: the angle between the copies of `direction` in a and b
+    /// stays below `limit_deg`.
     pub fn add_angle_limit(
         &mut self,
         label: &str,
@@ -952,31 +909,20 @@ impl Simulation {
         limit_deg: f64,
         params: JointParams,
     ) -> Result<JointHandle> {
-        check_axis(label, &direction)?;
-        check_param(
-            label,
-            "limit_deg",
+        let kind = JointKind::AngleLimit {
+            axis: arr(direction),
             limit_deg,
-            (0.0..=180.0).contains(&limit_deg),
-            "must be in [0, 180]",
-        )?;
-        let mut j = Builder::new(self, label, a, Some(b), params)?;
-        j.angle_limit(&direction, limit_deg.to_radians());
-        Ok(j.finish())
+        };
+        self.add_joint(label, a, Some(b), kind, params)
     }
 
-    /// Fix a body to the world at its current pose; drive it kinematically with
-    /// [`Simulation::set_fixed_transform`].
+    /// [`JointKind::Fix`]: fix a body to the world at its current pose; drive it kinematically
+    /// with [`Simulation::set_fixed_transform`].
     pub fn add_fix_joint(&mut self, label: &str, body: RigidBodyHandle, params: JointParams) -> Result<JointHandle> {
-        let t = self.body_position(body);
-        let mut j = Builder::new(self, label, None, Some(body), params)?;
-        j.point(&t);
-        j.direction(&Vector3::z());
-        j.direction(&Vector3::x());
-        Ok(j.finish())
+        self.add_joint(label, None, Some(body), JointKind::Fix {}, params)
     }
 
-    /// Glue two bodies together at their current relative pose.
+    /// [`JointKind::Attachment`]: glue two bodies together at their current relative pose.
     pub fn add_attachment_joint(
         &mut self,
         label: &str,
@@ -984,16 +930,11 @@ impl Simulation {
         b: RigidBodyHandle,
         params: JointParams,
     ) -> Result<JointHandle> {
-        let mid = 0.5 * (self.body_position(a) + self.body_position(b));
-        let mut j = Builder::new(self, label, Some(a), Some(b), params)?;
-        j.point(&mid);
-        j.direction(&Vector3::z());
-        j.direction(&Vector3::x());
-        Ok(j.finish())
+        self.add_joint(label, Some(a), Some(b), JointKind::Attachment {}, params)
     }
 
-    /// Hinge: b rotates relative to a about `axis` through `point_m` (1 DOF). Its coordinate is
-    /// the rotation angle (zero at creation).
+    /// [`JointKind::Hinge`]: b rotates relative to a about `axis` through `point_m` (1 DOF).
+    /// Its coordinate is the rotation angle (zero at creation).
     pub fn add_hinge_joint(
         &mut self,
         label: &str,
@@ -1003,16 +944,15 @@ impl Simulation {
         axis: Vector3<f64>,
         params: JointParams,
     ) -> Result<JointHandle> {
-        check_vec(label, "point", &point_m)?;
-        check_axis(label, &axis)?;
-        let mut j = Builder::new(self, label, a, Some(b), params)?;
-        j.point(&point_m);
-        j.direction(&axis);
-        j.angle_measure(&axis);
-        Ok(j.finish())
+        let kind = JointKind::Hinge {
+            point_m: arr(point_m),
+            axis: arr(axis),
+        };
+        self.add_joint(label, a, Some(b), kind, params)
     }
 
-    /// Hinge whose angle stays within ±`limit_deg` of its creation angle.
+    /// [`JointKind::HingeLimit`]: a hinge whose angle stays within ±`limit_deg` of its
+    /// creation angle.
     #[allow(clippy::too_many_arguments)]
     pub fn add_hinge_joint_with_limit(
         &mut self,
@@ -1024,22 +964,17 @@ impl Simulation {
         limit_deg: f64,
         params: JointParams,
     ) -> Result<JointHandle> {
-        check_param(
-            label,
-            "limit_deg",
+        let kind = JointKind::HingeLimit {
+            point_m: arr(point_m),
+            axis: arr(axis),
             limit_deg,
-            (0.0..=180.0).contains(&limit_deg),
-            "must be in [0, 180]",
-        )?;
-        let mut h = self.add_hinge_joint(label, a, b, point_m, axis, params)?;
-        let mut j = Builder::new(self, label, a, Some(b), params)?;
-        j.angle_limit(&perpendicular(&axis), limit_deg.to_radians());
-        h.elements.extend(j.elements);
-        Ok(self.register_joint(h))
+        };
+        self.add_joint(label, a, Some(b), kind, params)
     }
 
-    /// Universal (Cardan) joint: a ball joint at `point_m` whose cross keeps `axis_a` (fixed in
-    /// a) perpendicular to `axis_b` (fixed in b); they must be perpendicular now (2 DOFs).
+    /// [`JointKind::Universal`] (Cardan) joint: a ball joint at `point_m` whose cross keeps
+    /// `axis_a` (fixed in a) perpendicular to `axis_b` (fixed in b); they must be perpendicular
+    /// now (2 DOFs).
     ///
     /// While it transmits a twist torque `τ`, pivoting about its cross is neutral in reality but
     /// grows in the discrete step at about `(dt·τ²/2J²)^(1/3)` per second (the joint torque enters
@@ -1056,24 +991,16 @@ impl Simulation {
         axis_b: Vector3<f64>,
         params: JointParams,
     ) -> Result<JointHandle> {
-        check_vec(label, "point", &point_m)?;
-        check_axis(label, &axis_a)?;
-        check_axis(label, &axis_b)?;
-        if axis_a.normalize().dot(&axis_b.normalize()).abs() > 1e-6 {
-            return Err(StarkError::InvalidInput(format!(
-                "joint '{label}': the universal joint's axes must be perpendicular"
-            )));
-        }
-        let mut j = Builder::new(self, label, a, Some(b), params)?;
-        j.point(&point_m);
-        let [a0, a1] = j.a.direction(&axis_a);
-        let [b0, b1] = j.b.direction(&axis_b);
-        j.push(Primitive::Perpendicular, &[a0, a1, b0, b1]);
-        Ok(j.finish())
+        let kind = JointKind::Universal {
+            point_m: arr(point_m),
+            axis_a: arr(axis_a),
+            axis_b: arr(axis_b),
+        };
+        self.add_joint(label, a, Some(b), kind, params)
     }
 
-    /// Slider (cylindrical joint): b's point at `point_m` moves along a's `axis` and b keeps the
-    /// axis direction; rotation about the axis stays free (2 DOFs).
+    /// [`JointKind::Slider`] (cylindrical joint): b's point at `point_m` moves along a's `axis`
+    /// and b keeps the axis direction; rotation about the axis stays free (2 DOFs).
     pub fn add_slider_joint(
         &mut self,
         label: &str,
@@ -1083,17 +1010,15 @@ impl Simulation {
         axis: Vector3<f64>,
         params: JointParams,
     ) -> Result<JointHandle> {
-        check_vec(label, "point", &point_m)?;
-        check_axis(label, &axis)?;
-        let mut j = Builder::new(self, label, a, Some(b), params)?;
-        j.point_on_axis(&point_m, &axis);
-        j.direction(&axis);
-        j.position_measure(&point_m, &axis);
-        Ok(j.finish())
+        let kind = JointKind::Slider {
+            point_m: arr(point_m),
+            axis: arr(axis),
+        };
+        self.add_joint(label, a, Some(b), kind, params)
     }
 
-    /// Prismatic joint: a slider that also locks the rotation about its axis (1 DOF). Its
-    /// coordinate is the displacement along the axis.
+    /// [`JointKind::Prismatic`]: a slider that also locks the rotation about its axis (1 DOF).
+    /// Its coordinate is the displacement along the axis.
     pub fn add_prismatic_joint(
         &mut self,
         label: &str,
@@ -1103,16 +1028,16 @@ impl Simulation {
         axis: Vector3<f64>,
         params: JointParams,
     ) -> Result<JointHandle> {
-        let mut h = self.add_slider_joint(label, a, b, point_m, axis, params)?;
-        let mut j = Builder::new(self, label, a, Some(b), params)?;
-        j.direction(&perpendicular(&axis));
-        h.elements.extend(j.elements);
-        Ok(self.register_joint(h))
+        let kind = JointKind::Prismatic {
+            point_m: arr(point_m),
+            axis: arr(axis),
+        };
+        self.add_joint(label, a, Some(b), kind, params)
     }
 
-    /// Prismatic press (pistons, grippers): a prismatic joint driven at `target_m_s` along
-    /// `axis` with at most `max_force_n`; the force is linear in the velocity error below
-    /// `delay_m_s` (default 0.01 m/s).
+    /// [`JointKind::PrismaticPress`] (pistons, grippers): a prismatic joint driven at
+    /// `target_m_s` along `axis` with at most `max_force_n`; the force is linear in the velocity
+    /// error below `delay_m_s` (default 0.01 m/s).
     #[allow(clippy::too_many_arguments)]
     pub fn add_prismatic_press(
         &mut self,
@@ -1126,17 +1051,19 @@ impl Simulation {
         delay_m_s: f64,
         params: JointParams,
     ) -> Result<JointHandle> {
-        check_controller(label, max_force_n, delay_m_s)?;
-        let mut h = self.add_prismatic_joint(label, a, b, point_m, axis, params)?;
-        let mut j = Builder::new(self, label, a, Some(b), params)?;
-        j.linear_velocity(&point_m, &axis, target_m_s, max_force_n, delay_m_s);
-        h.elements.extend(j.elements);
-        h.driver = j.driver;
-        Ok(self.register_joint(h))
+        let kind = JointKind::PrismaticPress {
+            point_m: arr(point_m),
+            axis: arr(axis),
+            target_velocity_m_s: target_m_s,
+            max_force_n,
+            delay_m_s,
+        };
+        self.add_joint(label, a, Some(b), kind, params)
     }
 
-    /// Motor: a hinge driven at `target_rad_s` about `axis` with at most `max_torque_n_m`; the
-    /// torque is linear in the speed error below `delay_rad_s` (default 0.01 rad/s).
+    /// [`JointKind::Motor`]: a hinge driven at `target_rad_s` about `axis` with at most
+    /// `max_torque_n_m`; the torque is linear in the speed error below `delay_rad_s` (default
+    /// 0.01 rad/s).
     #[allow(clippy::too_many_arguments)]
     pub fn add_motor(
         &mut self,
@@ -1150,16 +1077,18 @@ impl Simulation {
         delay_rad_s: f64,
         params: JointParams,
     ) -> Result<JointHandle> {
-        check_controller(label, max_torque_n_m, delay_rad_s)?;
-        let mut h = self.add_hinge_joint(label, a, b, point_m, axis, params)?;
-        let mut j = Builder::new(self, label, a, Some(b), params)?;
-        j.angular_velocity(&axis, target_rad_s, max_torque_n_m, delay_rad_s);
-        h.elements.extend(j.elements);
-        h.driver = j.driver;
-        Ok(self.register_joint(h))
+        let kind = JointKind::Motor {
+            point_m: arr(point_m),
+            axis: arr(axis),
+            target_velocity_deg_s: target_rad_s.to_degrees(),
+            max_torque_n_m,
+            delay_deg_s: delay_deg_s(delay_rad_s),
+        };
+        self.add_joint(label, a, Some(b), kind, params)
     }
 
-    /// Angular velocity controller alone (no hinge): drives `(ω_b − ω_a)·axis` to `target_rad_s`.
+    /// [`JointKind::AngularVelocity`] controller alone (no hinge): drives `(ω_b − ω_a)·axis` to
+    /// `target_rad_s`.
     #[allow(clippy::too_many_arguments)]
     pub fn add_angular_velocity_controller(
         &mut self,
@@ -1171,15 +1100,17 @@ impl Simulation {
         max_torque_n_m: f64,
         delay_rad_s: f64,
     ) -> Result<JointHandle> {
-        check_axis(label, &axis)?;
-        check_controller(label, max_torque_n_m, delay_rad_s)?;
-        let mut j = Builder::new(self, label, a, Some(b), JointParams::default())?;
-        j.angular_velocity(&axis, target_rad_s, max_torque_n_m, delay_rad_s);
-        Ok(j.finish())
+        let kind = JointKind::AngularVelocity {
+            axis: arr(axis),
+            target_velocity_deg_s: target_rad_s.to_degrees(),
+            max_torque_n_m,
+            delay_deg_s: delay_deg_s(delay_rad_s),
+        };
+        self.add_joint(label, a, Some(b), kind, JointParams::default())
     }
 
-    /// Linear velocity controller alone: drives the velocity of b's point at `point_m` relative
-    /// to a's along a's `axis` to `target_m_s`.
+    /// [`JointKind::LinearVelocity`] controller alone: drives the velocity of b's point at
+    /// `point_m` relative to a's along a's `axis` to `target_m_s`.
     #[allow(clippy::too_many_arguments)]
     pub fn add_linear_velocity_controller(
         &mut self,
@@ -1192,14 +1123,17 @@ impl Simulation {
         max_force_n: f64,
         delay_m_s: f64,
     ) -> Result<JointHandle> {
-        check_axis(label, &axis)?;
-        check_controller(label, max_force_n, delay_m_s)?;
-        let mut j = Builder::new(self, label, a, Some(b), JointParams::default())?;
-        j.linear_velocity(&point_m, &axis, target_m_s, max_force_n, delay_m_s);
-        Ok(j.finish())
+        let kind = JointKind::LinearVelocity {
+            point_m: arr(point_m),
+            axis: arr(axis),
+            target_velocity_m_s: target_m_s,
+            max_force_n,
+            delay_m_s,
+        };
+        self.add_joint(label, a, Some(b), kind, JointParams::default())
     }
 
-    /// Position servo on a hinge: a motor whose target speed each step closes the remaining
+    /// [`JointKind::HingeServo`]: a motor whose target speed each step closes the remaining
     /// angle error within `response_time_s`, with at most `max_torque_n_m`. The target is an
     /// angle modulo 360° (the hinge angle is measured in (−180°, 180°]); the servo turns the
     /// shorter way to it. See [`Servo`] for its steady offset under load.
@@ -1216,34 +1150,17 @@ impl Simulation {
         response_time_s: f64,
         params: JointParams,
     ) -> Result<JointHandle> {
-        check_param(
-            label,
-            "response_time_s",
-            response_time_s,
-            response_time_s >= 0.0 && response_time_s.is_finite(),
-            "must be non-negative (s)",
-        )?;
-        let h = self.add_motor(
-            label,
-            a,
-            b,
-            point_m,
-            axis,
-            0.0,
+        let kind = JointKind::HingeServo {
+            point_m: arr(point_m),
+            axis: arr(axis),
+            target_deg,
             max_torque_n_m,
-            DEFAULT_CONTROLLER_DELAY,
-            params,
-        )?;
-        let el = &mut self.rigid_bodies.joints.potential.elements[h.driver.expect("motor driver") as usize];
-        el.servo = Some(Servo {
-            target: target_deg.to_radians(),
             response_time_s,
-            measure: h.measure.expect("hinge angle"),
-        });
-        Ok(h)
+        };
+        self.add_joint(label, a, Some(b), kind, params)
     }
 
-    /// Position servo on a prismatic joint: a press whose target velocity each step closes the
+    /// [`JointKind::PrismaticServo`]: a press whose target velocity each step closes the
     /// remaining position error within `response_time_s`, with at most `max_force_n`.
     #[allow(clippy::too_many_arguments)]
     pub fn add_prismatic_servo(
@@ -1258,37 +1175,18 @@ impl Simulation {
         response_time_s: f64,
         params: JointParams,
     ) -> Result<JointHandle> {
-        check_param(
-            label,
-            "response_time_s",
-            response_time_s,
-            response_time_s >= 0.0 && response_time_s.is_finite(),
-            "must be non-negative (s)",
-        )?;
-        let h = self.add_prismatic_press(
-            label,
-            a,
-            b,
-            point_m,
-            axis,
-            0.0,
+        let kind = JointKind::PrismaticServo {
+            point_m: arr(point_m),
+            axis: arr(axis),
+            target_m,
             max_force_n,
-            DEFAULT_CONTROLLER_DELAY,
-            params,
-        )?;
-        let el = &mut self.rigid_bodies.joints.potential.elements[h.driver.expect("press driver") as usize];
-        el.servo = Some(Servo {
-            target: target_m,
             response_time_s,
-            measure: h.measure.expect("slider position"),
-        });
-        Ok(h)
+        };
+        self.add_joint(label, a, Some(b), kind, params)
     }
 
-    /// Angle limits of a hinge about `axis` through `point_m`: b's rotation relative to a (zero
-    /// now) stays in `[lower_rad, upper_rad]` (which must contain 0, at most one turn wide). An
-    /// angle-limit primitive between a's copy of a direction perpendicular to the axis, turned
-    /// to the middle of the range, and b's copy of it, with half the range as its limit.
+    /// [`JointKind::HingeRange`]: b's rotation about `axis` relative to a (zero now) stays in
+    /// `[lower_rad, upper_rad]` (which must contain 0, at most one turn wide).
     #[allow(clippy::too_many_arguments)]
     pub fn add_hinge_range(
         &mut self,
@@ -1301,37 +1199,16 @@ impl Simulation {
         upper_rad: f64,
         params: JointParams,
     ) -> Result<JointHandle> {
-        check_vec(label, "point", &point_m)?;
-        check_axis(label, &axis)?;
-        let tau = std::f64::consts::TAU;
-        if !(lower_rad.is_finite() && upper_rad.is_finite() && lower_rad <= 1e-12 && upper_rad >= -1e-12) {
-            return Err(StarkError::InvalidInput(format!(
-                "joint '{label}': the angle range [{lower_rad}, {upper_rad}] rad must be finite and contain the current angle 0"
-            )));
-        }
-        if upper_rad - lower_rad > tau {
-            return Err(StarkError::InvalidInput(format!(
-                "joint '{label}': the angle range [{lower_rad}, {upper_rad}] rad is wider than a turn"
-            )));
-        }
-        let u = perpendicular(&axis);
-        let middle = UnitQuaternion::from_axis_angle(&Unit::new_normalize(axis), 0.5 * (lower_rad + upper_rad));
-        let mut j = Builder::new(self, label, a, Some(b), params)?;
-        let [a0, a1] = j.a.direction(&(middle * u));
-        let [b0, b1] = j.b.direction(&u);
-        j.push(
-            Primitive::AngleLimit {
-                limit_rad: 0.5 * (upper_rad - lower_rad),
-            },
-            &[a0, a1, b0, b1],
-        );
-        Ok(j.finish())
+        let kind = JointKind::HingeRange {
+            point_m: arr(point_m),
+            axis: arr(axis),
+            limits_deg: [lower_rad.to_degrees(), upper_rad.to_degrees()],
+        };
+        self.add_joint(label, a, Some(b), kind, params)
     }
 
-    /// Position limits of a slider along `axis` through `point_m`: b's displacement relative to
-    /// a (zero now) stays in `[lower_m, upper_m]` (which must contain 0). A distance-limits
-    /// primitive from a point of a at `lower_m − L` on the axis (`L` = 1 m plus the range, so the
-    /// distance stays far from zero and nearly linear in the displacement) to b's point.
+    /// [`JointKind::SliderRange`]: b's displacement along `axis` relative to a (zero now)
+    /// stays in `[lower_m, upper_m]` (which must contain 0).
     #[allow(clippy::too_many_arguments)]
     pub fn add_slider_range(
         &mut self,
@@ -1344,30 +1221,16 @@ impl Simulation {
         upper_m: f64,
         params: JointParams,
     ) -> Result<JointHandle> {
-        check_vec(label, "point", &point_m)?;
-        check_axis(label, &axis)?;
-        if !(lower_m.is_finite() && upper_m.is_finite() && lower_m <= 1e-12 && upper_m >= -1e-12) {
-            return Err(StarkError::InvalidInput(format!(
-                "joint '{label}': the position range [{lower_m}, {upper_m}] m must be finite and contain the current position 0"
-            )));
-        }
-        let n = axis.normalize();
-        let reach = 1.0 + (upper_m - lower_m);
-        let mut j = Builder::new(self, label, a, Some(b), params)?;
-        let nodes = [j.a.point(&(point_m + n * (lower_m - reach))), j.b.point(&point_m)];
-        j.push(
-            Primitive::DistanceLimits {
-                min_m: reach,
-                max_m: reach + (upper_m - lower_m),
-            },
-            &nodes,
-        );
-        Ok(j.finish())
+        let kind = JointKind::SliderRange {
+            point_m: arr(point_m),
+            axis: arr(axis),
+            limits_m: [lower_m, upper_m],
+        };
+        self.add_joint(label, a, Some(b), kind, params)
     }
 
-    /// Planar joint: b's point at `point_m` stays on a's plane through it with `normal`, and b
-    /// keeps the normal's direction (3 DOFs: two translations in the plane, the rotation about
-    /// the normal).
+    /// [`JointKind::Planar`] joint: b's point at `point_m` stays on a's plane through it with
+    /// `normal`, and b keeps the normal's direction (3 DOFs).
     pub fn add_planar_joint(
         &mut self,
         label: &str,
@@ -1377,23 +1240,17 @@ impl Simulation {
         normal: Vector3<f64>,
         params: JointParams,
     ) -> Result<JointHandle> {
-        check_vec(label, "point", &point_m)?;
-        check_axis(label, &normal)?;
-        let mut j = Builder::new(self, label, a, Some(b), params)?;
-        let nodes = [
-            j.a.point(&point_m),
-            j.a.point(&(point_m + normal.normalize())),
-            j.b.point(&point_m),
-        ];
-        j.push(Primitive::PointOnPlane, &nodes);
-        j.direction(&normal);
-        Ok(j.finish())
+        let kind = JointKind::Planar {
+            point_m: arr(point_m),
+            normal: arr(normal),
+        };
+        self.add_joint(label, a, Some(b), kind, params)
     }
 
-    /// Coupling of two joint coordinates (URDF `<mimic>`): `q_b = multiplier·q_a + offset`,
-    /// both measured from the joints' creation (hinge angles in rad, slider positions in m), as a
+    /// [`JointKind::JointCoupling`] (URDF `<mimic>`): `q_b = multiplier·q_a + offset`, both
+    /// measured from the joints' creation (hinge angles in rad, slider positions in m), as a
     /// hard penalty of stiffness `params.stiffness` hardened to the tolerance of `b`'s kind (see
-    /// [`coupling`]). The joints must have coordinates.
+    /// [`coupling`]). The joints must have coordinates and unique labels.
     pub fn add_joint_coupling(
         &mut self,
         label: &str,
@@ -1403,37 +1260,19 @@ impl Simulation {
         offset: f64,
         params: JointParams,
     ) -> Result<JointHandle> {
-        check_param(
-            label,
-            "multiplier",
-            multiplier,
-            multiplier.is_finite(),
-            "must be finite",
-        )?;
-        check_param(label, "offset", offset, offset.is_finite(), "must be finite")?;
-        let coordinate = |h: &JointHandle| {
-            h.measure.ok_or_else(|| {
-                StarkError::InvalidInput(format!(
-                    "joint '{label}' couples joint '{}', which has no coordinate (hinges and sliders have)",
-                    h.label
-                ))
-            })
-        };
-        let (ma, mb) = (coordinate(a)?, coordinate(b)?);
-        let c = coupling::Coupling {
-            a: Some(coupling::CoupledCoordinate::new(ma)),
-            b: coupling::CoupledCoordinate::new(mb),
+        let kind = JointKind::JointCoupling {
+            joint_a: a.label.clone(),
+            joint_b: b.label.clone(),
             multiplier,
             offset,
-            damping: 0.0,
-            hard: true,
         };
-        self.add_coupling_element(label, c, params)
+        self.add_joint(label, None, None, kind, params)
     }
 
-    /// A spring–damper on a joint's coordinate: torque or force `−k·(q − rest) − d·q̇`, with `q`
-    /// measured from the joint's creation (rad or m). `stiffness` in N·m/rad or N/m, `damping`
-    /// in N·m·s/rad or N·s/m; with zero stiffness it is pure joint damping.
+    /// [`JointKind::JointSpring`]: a spring–damper on a joint's coordinate: torque or force
+    /// `−k·(q − rest) − d·q̇`, with `q` measured from the joint's creation (rad or m).
+    /// `stiffness` in N·m/rad or N/m, `damping` in N·m·s/rad or N·s/m; with zero stiffness it
+    /// is pure joint damping.
     pub fn add_joint_spring(
         &mut self,
         label: &str,
@@ -1442,53 +1281,17 @@ impl Simulation {
         rest: f64,
         damping: f64,
     ) -> Result<JointHandle> {
-        check_param(
-            label,
-            "stiffness",
-            stiffness,
-            stiffness >= 0.0 && stiffness.is_finite(),
-            "must be non-negative",
-        )?;
-        check_param(label, "rest", rest, rest.is_finite(), "must be finite")?;
-        check_param(
-            label,
-            "damping",
+        let kind = JointKind::JointSpring {
+            joint: joint.label.clone(),
+            spring_stiffness: stiffness,
+            rest,
             damping,
-            damping >= 0.0 && damping.is_finite(),
-            "must be non-negative",
-        )?;
-        let m = joint.measure.ok_or_else(|| {
-            StarkError::InvalidInput(format!(
-                "joint '{label}': joint '{}' has no coordinate for a spring (hinges and sliders have)",
-                joint.label
-            ))
-        })?;
-        let c = coupling::Coupling {
-            a: None,
-            b: coupling::CoupledCoordinate::new(m),
-            multiplier: 0.0,
-            offset: rest,
-            damping,
-            hard: false,
         };
-        let h = self.add_coupling_element(label, c, JointParams::default())?;
-        let e = h.elements[0] as usize;
-        self.rigid_bodies.joints.potential.elements[e].stiffness = stiffness;
-        Ok(h)
+        self.add_joint(label, None, None, kind, JointParams::default())
     }
+}
 
-    fn add_coupling_element(&mut self, label: &str, c: coupling::Coupling, params: JointParams) -> Result<JointHandle> {
-        let (parent, child) = match c.b.measure {
-            Measure::Angle { a, b, .. } | Measure::Position { a, b, .. } => (a, b),
-        };
-        let handle = |i: Option<u32>| i.map(|index| RigidBodyHandle { index });
-        let child = handle(child).ok_or_else(|| StarkError::InvalidInput(format!("joint '{label}': no body")))?;
-        let mut j = Builder::new(self, label, handle(parent), Some(child), params)?;
-        let nodes = c.nodes();
-        j.push(Primitive::Coupling(Box::new(c)), &nodes);
-        Ok(j.finish())
-    }
-
+impl Simulation {
     // ---- Run-time control and readouts ----
 
     fn joint_elements_mut(&mut self, h: &JointHandle) -> Result<Vec<&mut JointElement>> {
