@@ -61,6 +61,10 @@ pub enum Actuator {
         /// reaches it, rad/s (default 0.01).
         #[serde(default)]
         delay_rad_s: Option<f64>,
+        /// Drive only: no braking torque when the joint turns faster than the target
+        /// ([`Simulation::set_motor_drive_only`]; default false).
+        #[serde(default)]
+        drive_only: bool,
     },
     /// A force-limited press or gripper on a slider ([`Simulation::add_prismatic_press`]):
     /// drives the joint rate to `target_m_s`, pushing with at most `max_force_n`, and stalls
@@ -986,6 +990,7 @@ impl Simulation {
                                 target_rad_s,
                                 max_torque_n_m,
                                 delay_rad_s,
+                                ..
                             }),
                             _,
                         ) => JointKind::Motor {
@@ -1046,6 +1051,9 @@ impl Simulation {
                         },
                     };
                     let h = self.add_joint(&label, a, Some(b), kind, params).map_err(located)?;
+                    if let Some(Actuator::Motor { drive_only: true, .. }) = &actuator {
+                        self.set_motor_drive_only(&h, true).map_err(located)?;
+                    }
                     let limited = j.joint_type != urdf_rs::JointType::Continuous && j.limit.lower < j.limit.upper;
                     if limited {
                         let (lo, hi) = (j.limit.lower - q0, j.limit.upper - q0);

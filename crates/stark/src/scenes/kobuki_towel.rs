@@ -421,6 +421,8 @@ pub fn build(mut settings: Settings, case: Case) -> Result<(Simulation, RobotTow
                     target_rad_s: MOTOR_TARGET_RAD_S,
                     max_torque_n_m: Some(MOTOR_MAX_TORQUE_N_M),
                     delay_rad_s: Some(MOTOR_TRANSITION_RAD_S),
+                    // Driving only: the motors never brake the wheels.
+                    drive_only: true,
                 }),
                 ..Default::default()
             },

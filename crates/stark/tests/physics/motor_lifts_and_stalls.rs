@@ -313,3 +313,75 @@ fn two_presses_squeeze_an_object_with_their_max_force() {
     );
     assert!(on_object.norm() < 1e-6 && sim.body_position(object).norm() < 1e-6);
 }
+
+/// A 1 kg ball (radius 0.1 m, J = 0.004 kg·m²) on a motor about z through its centre, no gravity,
+/// target 2 rad/s, cap 0.02 N·m (5 rad/s² on J), spinning at `w0` rad/s at the start.
+fn flywheel(name: &str, w0: f64, drive_only: bool) -> (Simulation, JointHandle) {
+    let mut s = settings(name, DT);
+    s.gravity_m_s2 = [0.0; 3];
+    let mut sim = Simulation::new(s).unwrap();
+    let props = MassProperties::sphere(1.0, 0.1);
+    let ball = sim
+        .add_rigid_body_with("ball", &props, Vector3::zeros(), UnitQuaternion::identity())
+        .unwrap();
+    sim.set_body_angular_velocity(ball, Vector3::new(0.0, 0.0, w0)).unwrap();
+    let motor = sim
+        .add_motor(
+            "motor",
+            None,
+            ball,
+            Vector3::zeros(),
+            Vector3::z(),
+            2.0,
+            0.02,
+            DELAY,
+            JointParams::default(),
+        )
+        .unwrap();
+    sim.set_motor_drive_only(&motor, drive_only).unwrap();
+    (sim, motor)
+}
+
+#[test]
+fn a_drive_only_motor_drives_like_a_motor_and_never_brakes() {
+    let alpha = 0.02 / 0.004;
+    // From rest both accelerate at the cap, 5 rad/s², to the target.
+    for drive_only in [false, true] {
+        let (mut sim, motor) = flywheel("drive from rest", 0.0, drive_only);
+        sim.run(0.2).unwrap();
+        let s = sim.joint_state(&motor);
+        let rate = s.coordinate_rate.unwrap();
+        assert!((rate - alpha * 0.2).abs() < 1e-6, "drive_only {drive_only}: {rate}");
+        assert!((s.driver_effort - 0.02).abs() < 1e-9, "{}", s.driver_effort);
+        sim.run(1.0).unwrap();
+        let rate = sim.joint_state(&motor).coordinate_rate.unwrap();
+        assert!((rate - 2.0).abs() < DELAY, "drive_only {drive_only}: {rate}");
+    }
+    // Spinning at 5 rad/s, above the target: the motor brakes at the cap; the drive-only motor
+    // lets it coast (no friction anywhere: the rate stays 5 rad/s and the torque zero).
+    let (mut braked, m) = flywheel("braked", 5.0, false);
+    braked.run(0.2).unwrap();
+    let rate = braked.joint_state(&m).coordinate_rate.unwrap();
+    assert!((rate - (5.0 - alpha * 0.2)).abs() < 1e-6, "{rate}");
+    let (mut coasting, m) = flywheel("coasting", 5.0, true);
+    coasting.run(0.5).unwrap();
+    let s = coasting.joint_state(&m);
+    assert!(
+        (s.coordinate_rate.unwrap() - 5.0).abs() < 1e-9,
+        "{:?}",
+        s.coordinate_rate
+    );
+    assert!(s.driver_effort.abs() < 1e-12, "{}", s.driver_effort);
+    assert!(flywheel("no motor", 0.0, true)
+        .0
+        .set_motor_drive_only(
+            &JointHandle {
+                label: "x".into(),
+                elements: vec![],
+                driver: None,
+                measure: None,
+            },
+            true
+        )
+        .is_err());
+}

@@ -988,6 +988,7 @@ gravity_m_s2 = [0.0, 0.0, 0.0]
                 target_rad_s,
                 max_torque_n_m,
                 delay_rad_s,
+                ..
             } => {
                 assert_eq!(target_rad_s, 45f64.to_radians());
                 assert_eq!(max_torque_n_m, 2.0);

@@ -211,6 +211,7 @@ fn primitive_parameters(p: &mut Primitive) -> Vec<&mut f64> {
             target_rad_s,
             max_torque_n_m,
             delay_rad_s,
+            ..
         } => vec![target_rad_s, max_torque_n_m, delay_rad_s],
     }
 }
@@ -694,6 +695,7 @@ impl<'s> Builder<'s> {
                 target_rad_s,
                 max_torque_n_m,
                 delay_rad_s,
+                drive_only: false,
             },
             &[self.a.omega(), self.b.omega(), a0, a1],
         );
@@ -1435,6 +1437,24 @@ impl Simulation {
             _ => {
                 return Err(StarkError::InvalidInput(format!(
                     "joint '{}' has no velocity controller",
+                    h.label
+                )))
+            }
+        }
+        Ok(())
+    }
+
+    /// Make a motor (or angular velocity controller) drive only: its torque never opposes the
+    /// direction of its target, so it does not brake a joint turning faster than the target
+    /// (see [`Primitive::AngularVelocity`]). Set it when building the scene (it is part of the
+    /// scene, not of a checkpoint).
+    pub fn set_motor_drive_only(&mut self, h: &JointHandle, drive_only: bool) -> Result<()> {
+        let el = self.driver_mut(h)?;
+        match &mut el.primitive {
+            Primitive::AngularVelocity { drive_only: d, .. } => *d = drive_only,
+            _ => {
+                return Err(StarkError::InvalidInput(format!(
+                    "joint '{}' has no motor (angular velocity controller)",
                     h.label
                 )))
             }

@@ -82,6 +82,11 @@ pub enum Primitive {
         max_torque_n_m: f64,
         /// Angular velocity error below which the torque is linear, rad/s.
         delay_rad_s: f64,
+        /// Drives only: the torque never opposes the target's direction, so a joint turning
+        /// faster than its target (pushed, or rolling downhill) is not braked (a motor whose
+        /// driver cannot regenerate). Zero target: no torque at all.
+        #[serde(default)]
+        drive_only: bool,
     },
 }
 
@@ -191,10 +196,25 @@ impl Primitive {
                 target_rad_s,
                 max_torque_n_m,
                 delay_rad_s,
+                drive_only,
             } => {
                 let axis = x[3] - x[2];
                 let u = (x[1] - x[0]).dot(&axis) - target_rad_s;
-                capped(u, max_torque_n_m, delay_rad_s) * dt
+                if drive_only && target_rad_s == 0.0 {
+                    S::zero()
+                } else if drive_only {
+                    // Φ only where the torque drives toward the target (u opposite to it):
+                    // C¹ at u = 0, where both sides have zero torque.
+                    let driving = if target_rad_s > 0.0 { -u } else { u };
+                    S::select_gt(
+                        driving,
+                        S::zero(),
+                        || capped(u, max_torque_n_m, delay_rad_s) * dt,
+                        S::zero,
+                    )
+                } else {
+                    capped(u, max_torque_n_m, delay_rad_s) * dt
+                }
             }
         }
     }
@@ -446,6 +466,17 @@ mod tests {
                         target_rad_s: ang_u - offset * delay,
                         max_torque_n_m: 3.0,
                         delay_rad_s: delay,
+                        drive_only: false,
+                    },
+                    ang_nodes,
+                );
+                push(
+                    &format!("angular velocity, drive only, {regime}"),
+                    Primitive::AngularVelocity {
+                        target_rad_s: ang_u - offset * delay,
+                        max_torque_n_m: 3.0,
+                        delay_rad_s: delay,
+                        drive_only: true,
                     },
                     ang_nodes,
                 );
