@@ -470,10 +470,13 @@ mod tests {
                     },
                     ang_nodes,
                 );
+                // Drive only: the error opposes the target's sign (the driving side), so the
+                // case is active.
+                let toward = f64::abs(offset) * delay * if ang_u >= 0.0 { 1.0 } else { -1.0 };
                 push(
                     &format!("angular velocity, drive only, {regime}"),
                     Primitive::AngularVelocity {
-                        target_rad_s: ang_u - offset * delay,
+                        target_rad_s: ang_u + toward,
                         max_torque_n_m: 3.0,
                         delay_rad_s: delay,
                         drive_only: true,
