@@ -19,7 +19,8 @@
 //! # "settings.time_step_s" = [0.01, 0.005]          # a dotted key is a `--set` override
 //! ```
 //!
-//! Relative paths are taken from the sweep file's folder.
+//! Relative paths are taken from the sweep file's folder. Cases are every combination of the
+//! grid's values, its keys in alphabetical order, the first varying slowest.
 
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -98,7 +99,8 @@ fn value_text(v: &toml::Value) -> String {
     }
 }
 
-/// The cases of a sweep file, in grid order (the first key varies slowest).
+/// The cases of a sweep file: every combination of the grid's values, its keys taken in
+/// alphabetical order with the first varying slowest.
 pub fn cases(file: &Path) -> stark::Result<(Vec<Case>, SweepPlan)> {
     let text = std::fs::read_to_string(file).map_err(|e| bad(format!("{}: {e}", file.display())))?;
     let s: SweepFile = toml::from_str(&text).map_err(|e| bad(format!("{}: {e}", file.display())))?;
@@ -477,8 +479,8 @@ configuration = [1, 2]
             names,
             [
                 "kobuki_towel_carpet_1__time_step_s=0.01",
-                "kobuki_towel_carpet_2__time_step_s=0.01",
                 "kobuki_towel_polished_1__time_step_s=0.01",
+                "kobuki_towel_carpet_2__time_step_s=0.01",
                 "kobuki_towel_polished_2__time_step_s=0.01"
             ]
         );

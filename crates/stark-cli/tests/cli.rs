@@ -257,3 +257,47 @@ fn sweep_resumes_an_interrupted_case_from_its_checkpoint() {
     let steps = log_lines(&log);
     assert_eq!(steps.len() as u64, r["summary"]["steps"].as_u64().unwrap());
 }
+
+/// CI's short robot–towel case (issue 13): the first 0.3 s of the paper's experiment on carpet
+/// with the flat towel, checked for intersections after every step. The robot lands, its motors
+/// push at their cap and it starts to drive; every step converges to the paper's 1e-6 N.
+#[test]
+fn robot_towel_case_runs_clean_for_its_first_tenths_of_a_second() {
+    let dir = tempfile::tempdir().unwrap();
+    let name = "kobuki_towel_carpet_1";
+    let out = ok(stark()
+        .args([
+            "run",
+            "--scene",
+            name,
+            "--duration",
+            "0.3",
+            "--check",
+            "--quiet",
+            "--no-frames",
+        ])
+        .args(["--threads", "2", "--summary-json"])
+        .arg(dir.path().join("summary.json"))
+        .arg("--out")
+        .arg(dir.path())
+        .output()
+        .unwrap());
+    assert!(out.contains("outcome               "), "{out}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("summary.json")).unwrap()).unwrap();
+    let s = summary.get(0).unwrap_or(&summary);
+    // Every accepted step converged (a failed attempt is retried with half the step).
+    assert!(s["max_residual_n"].as_f64().unwrap() <= 1e-6, "{s}");
+    let steps = s["steps"].as_u64().unwrap();
+    assert!(steps >= 60, "{s}");
+    let checked = format!("check                 no intersection in any of {} states", steps + 1);
+    assert!(out.contains(&checked), "{out}");
+    // The robot drives forward (cap-limited: ~1 m/s² from rest, so ~3 cm in 0.3 s).
+    let log = log_lines(&dir.path().join(format!("{name}.robot_towel.jsonl")));
+    let y = |l: &serde_json::Value| l["robot_towel"]["sample"]["robot_y_m"].as_f64().unwrap();
+    let advance = y(log.last().unwrap()) - y(&log[0]);
+    assert!(advance > 0.02 && advance < 0.06, "{advance}");
+    for png in ["motors", "final"] {
+        assert!(dir.path().join(format!("{name}.{png}.png")).exists());
+    }
+}
