@@ -211,6 +211,13 @@ impl SweepPlan {
     }
 }
 
+/// The checkpoint a case's run left in `run_dir`, if any.
+fn checkpoint(case: &Case, run_dir: &Path) -> Option<PathBuf> {
+    scene_name(case, run_dir)
+        .map(|n| run_dir.join(format!("{n}.ckpt")))
+        .filter(|c| c.exists())
+}
+
 /// The scene name a case's run writes its files under.
 fn scene_name(case: &Case, run_dir: &Path) -> Option<String> {
     match &case.scene {
@@ -228,8 +235,7 @@ fn spawn(case: &Case, plan: &SweepPlan) -> stark::Result<Child> {
     let dir = plan.run_dir(case);
     std::fs::create_dir_all(&dir).map_err(|e| bad(format!("{}: {e}", dir.display())))?;
     let mut cmd = Command::new(exe);
-    let checkpoint = scene_name(case, &dir).map(|n| dir.join(format!("{n}.ckpt")));
-    match checkpoint.filter(|c| c.exists()) {
+    match checkpoint(case, &dir) {
         Some(ckpt) => {
             let header = stark::io::read_checkpoint_header(&ckpt)?;
             cmd.arg("resume").arg(&ckpt);
@@ -337,9 +343,7 @@ pub fn sweep(file: &Path) -> stark::Result<bool> {
     while k < todo.len() {
         let case = todo[k];
         let dir = plan.run_dir(case);
-        let finished = scene_name(case, &dir)
-            .map(|n| dir.join(format!("{n}.ckpt")))
-            .filter(|c| c.exists())
+        let finished = checkpoint(case, &dir)
             .and_then(|c| stark::io::read_checkpoint_header(&c).ok())
             .zip(plan.duration_s)
             .is_some_and(|(h, d)| h.time_s >= d - 1e-9);

@@ -302,15 +302,28 @@ fn parse(obj: &str, file: &str) -> Result<meshes::Mesh<3>> {
     Ok(crate::io::mesh_files::parse_obj(obj, file)?)
 }
 
-/// Build a run of the suite (see the module docs for the model).
-pub fn build(mut settings: Settings, case: Case) -> Result<(Simulation, RobotTowel)> {
-    if !(1..=8).contains(&case.configuration) {
+/// The towel in configuration `configuration` (1–8): the flat grid (rest shape, with its
+/// triangles) and the configuration's positions of the same vertices.
+pub fn towel_meshes(configuration: usize) -> Result<(meshes::Mesh<3>, Vec<Vector3<f64>>)> {
+    let Some(c) = configuration.checked_sub(1).and_then(|i| CONFIGURATIONS.get(i)) else {
         return Err(StarkError::InvalidInput(format!(
-            "towel configuration {} does not exist: the paper's are 1–8",
-            case.configuration
+            "towel configuration {configuration} does not exist: the paper's are 1–8"
+        )));
+    };
+    let rest = parse(TOWEL_FLAT_OBJ, "towel_flat.obj")?;
+    let initial = parse(c.obj, c.file)?;
+    if initial.elements != rest.elements || initial.vertices.len() != rest.vertices.len() {
+        return Err(StarkError::InvalidInput(format!(
+            "{} and towel_flat.obj must share their connectivity",
+            c.file
         )));
     }
-    let configuration = &CONFIGURATIONS[case.configuration - 1];
+    Ok((rest, initial.vertices))
+}
+
+/// Build a run of the suite (see the module docs for the model).
+pub fn build(mut settings: Settings, case: Case) -> Result<(Simulation, RobotTowel)> {
+    let (rest, initial) = towel_meshes(case.configuration)?;
     let thickness = DHAT_M / 2.0;
     settings.name = case.name();
     settings.time_step_s = 0.005;
@@ -321,16 +334,8 @@ pub fn build(mut settings: Settings, case: Case) -> Result<(Simulation, RobotTow
     settings.newton.linear_solver = crate::solver::LinearSolver::Cholesky;
 
     // ---- Towel: rest shape the flat grid, initial positions the configuration ----
-    let rest = parse(TOWEL_FLAT_OBJ, "towel_flat.obj")?;
-    let initial = parse(configuration.obj, configuration.file)?;
-    if initial.elements != rest.elements || initial.vertices.len() != rest.vertices.len() {
-        return Err(StarkError::InvalidInput(format!(
-            "{} and towel_flat.obj must share their connectivity",
-            configuration.file
-        )));
-    }
     let offset = Vector3::new(0.0, TOWEL_OFFSET_Y_M, 0.0);
-    let start: Vec<Vector3<f64>> = initial.vertices.iter().map(|p| p + offset).collect();
+    let start: Vec<Vector3<f64>> = initial.iter().map(|p| p + offset).collect();
     let z_min = start.iter().map(|p| p.z).fold(f64::INFINITY, f64::min);
     let floor_top = z_min - DHAT_M;
 

@@ -30,12 +30,24 @@ pub struct BuiltinScene {
 /// `paper` (names ending in `_paper`).
 macro_rules! kobuki_towel_scenes {
     ($(($floor:ident, $floor_name:literal, $c:literal, $what:literal)),* $(,)?) => {
-        [$(BuiltinScene {
-            name: concat!("kobuki_towel_", $floor_name, "_", $c),
-            description: concat!(
+        [$(kobuki_towel_scenes!(
+            @one $floor, $c, Original,
+            concat!("kobuki_towel_", $floor_name, "_", $c),
+            concat!(
                 "The paper's experiment: the Kobuki robot drives into a towel (", $what, ") on ",
                 $floor_name, ", 6 s; classified P/O/S"
-            ),
+            )
+        ),)*
+        $(kobuki_towel_scenes!(
+            @one $floor, $c, Paper,
+            concat!("kobuki_towel_", $floor_name, "_", $c, "_paper"),
+            concat!("kobuki_towel_", $floor_name, "_", $c, " with the parameters the paper's text states")
+        )),*]
+    };
+    (@one $floor:ident, $c:literal, $params:ident, $name:expr, $description:expr) => {
+        BuiltinScene {
+            name: $name,
+            description: $description,
             duration_s: kobuki_towel::DURATION_S,
             build: |s| {
                 kobuki_towel::builtin(
@@ -43,28 +55,11 @@ macro_rules! kobuki_towel_scenes {
                     kobuki_towel::Case {
                         floor: kobuki_towel::Floor::$floor,
                         configuration: $c,
-                        params: kobuki_towel::ParamSet::Original,
+                        params: kobuki_towel::ParamSet::$params,
                     },
                 )
             },
-        },)*
-        $(BuiltinScene {
-            name: concat!("kobuki_towel_", $floor_name, "_", $c, "_paper"),
-            description: concat!(
-                "kobuki_towel_", $floor_name, "_", $c, " with the parameters the paper's text states"
-            ),
-            duration_s: kobuki_towel::DURATION_S,
-            build: |s| {
-                kobuki_towel::builtin(
-                    s,
-                    kobuki_towel::Case {
-                        floor: kobuki_towel::Floor::$floor,
-                        configuration: $c,
-                        params: kobuki_towel::ParamSet::Paper,
-                    },
-                )
-            },
-        }),*]
+        }
     };
 }
 
@@ -865,27 +860,20 @@ pub const TOWEL_BOX_DURATION_S: f64 = 0.05;
 /// box–towel 0.4. The floor is a prescribed (kinematic) box whose top is `d̂` below the towel's
 /// lowest vertex, so the towel drops onto it within the first steps.
 pub fn towel_box(mut settings: Settings) -> Result<Simulation> {
-    const REST: &str = include_str!("../../assets/paper-scenes/towel_flat.obj");
-    const FOLDED: &str = include_str!("../../assets/paper-scenes/towel_2folds.obj");
     let dhat = 3.25e-3;
     let thickness = dhat / 2.0;
     settings.name = "towel_box".into();
     settings.time_step_s = 0.005;
     settings.newton.residual_tolerance_n = 1e-6;
     settings.contact.default_thickness_m = Some(thickness);
-    let meshes::Mesh {
-        vertices: rest,
-        elements: triangles,
-    } = crate::io::mesh_files::parse_obj(REST, "towel_flat.obj")?;
-    let meshes::Mesh {
-        vertices: folded,
-        elements: folded_triangles,
-    } = crate::io::mesh_files::parse_obj(FOLDED, "towel_2folds.obj")?;
-    if folded_triangles != triangles || folded.len() != rest.len() {
-        return Err(StarkError::InvalidInput(
-            "towel_2folds.obj and towel_flat.obj must share their connectivity".into(),
-        ));
-    }
+    // The suite's configuration 3: folded twice.
+    let (
+        meshes::Mesh {
+            vertices: rest,
+            elements: triangles,
+        },
+        folded,
+    ) = kobuki_towel::towel_meshes(3)?;
     let mut sim = Simulation::new(settings)?;
     let h = 3.25e-3;
     let e = 1.5e4;
