@@ -229,6 +229,9 @@ mirror! {
         max_line_search_iterations: usize,
         /// When element Hessians are projected: "always" or "on_demand" (default: "on_demand").
         projection: Choice<stark::solver::settings::Projection>,
+        /// Majorising Hessians (sliding friction) until a Newton step is taken in full, exact
+        /// ones after (default: true).
+        majorizer_far_from_solution: bool,
     }
 }
 

@@ -102,7 +102,10 @@ class NewtonSettings:
     """Largest number of step halvings in the line search (default: 30)."""
     projection: Literal["always", "on_demand"]
     """When element Hessians are projected: "always" or "on_demand" (default: "on_demand")."""
-    def __new__(cls, *, residual_tolerance_n: float = ..., step_tolerance_m_s: float = ..., max_iterations: int = ..., linear_solver: Literal["pcg", "cholesky"] = ..., cg_max_iterations: int = ..., cg_relative_tolerance: float = ..., armijo: float = ..., max_line_search_iterations: int = ..., projection: Literal["always", "on_demand"] = ...) -> NewtonSettings:
+    majorizer_far_from_solution: bool
+    """Majorising Hessians (sliding friction) until a Newton step is taken in full, exact
+    ones after (default: true)."""
+    def __new__(cls, *, residual_tolerance_n: float = ..., step_tolerance_m_s: float = ..., max_iterations: int = ..., linear_solver: Literal["pcg", "cholesky"] = ..., cg_max_iterations: int = ..., cg_relative_tolerance: float = ..., armijo: float = ..., max_line_search_iterations: int = ..., projection: Literal["always", "on_demand"] = ..., majorizer_far_from_solution: bool = ...) -> NewtonSettings:
         """Defaults of the library, with the given fields replaced."""
     def to_dict(self) -> dict[str, Any]:
         """The fields as a plain dict (nested settings as nested dicts)."""

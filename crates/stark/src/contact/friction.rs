@@ -92,8 +92,11 @@ impl FrictionElement {
         f0 * self.mu_lambda
     }
 
-    /// Value, gradient and Hessian (closed form, PSD) into `out`; unused nodes get zeros.
-    pub fn derivatives(&self, x: &[Vector3<f64>; 4], out: &mut HyperDual<4>) {
+    /// Value, gradient and Hessian (closed form, PSD) into `out`; unused nodes get zeros. With
+    /// `majorizer`, a sliding element's Hessian is `μλ (f₁/y) I` instead: the exact one has no
+    /// curvature along the slip, so Newton from a sliding iterate jumps far past a solution that
+    /// sticks (a light rolling wheel: its spin is held by friction alone).
+    pub fn derivatives(&self, x: &[Vector3<f64>; 4], majorizer: bool, out: &mut HyperDual<4>) {
         let mut u = [-self.u0[0], -self.u0[1]];
         for i in 0..self.len {
             for k in 0..2 {
@@ -110,6 +113,8 @@ impl FrictionElement {
                 -y / (eps * eps) + 2.0 / eps,
                 -1.0 / (y * eps * eps),
             )
+        } else if majorizer {
+            (y, 1.0 / y, 0.0)
         } else {
             (y, 1.0 / y, -1.0 / (y * y * y))
         };
@@ -171,7 +176,7 @@ mod tests {
             x[0] += Vector3::new(slip * 0.8, slip * 0.6, 1e-4);
             x[2] += Vector3::new(-slip * 0.1, 0.0, 0.0);
             let mut fast = HyperDual::<4>::constant(0.0);
-            el.derivatives(&x, &mut fast);
+            el.derivatives(&x, false, &mut fast);
             let mut oracle = el.energy(&HyperDual::<4>::variables(&x));
             symmetrize(&mut oracle);
             assert!((fast.value - oracle.value).abs() < 1e-12);
@@ -189,6 +194,46 @@ mod tests {
                 assert!((g.norm() - 2.5).abs() < 1e-6, "{}", g.norm());
             }
         }
+    }
+
+    /// The sliding stand-in majorises the friction energy around the iterate (`f₀(√s)` is
+    /// concave in `s = ‖u‖²`): the quadratic model with it lies above `D` everywhere, so a full
+    /// step on it cannot increase the friction energy, whereas the exact Hessian's model (no
+    /// curvature along the slip) lies below `D` for steps across the stick zone.
+    #[test]
+    fn sliding_majorizer_lies_above_the_energy() {
+        let x0 = [Vector3::zeros(); 4];
+        let (ml, eps) = (2.0, 1e-4);
+        let el = FrictionElement::new([0, 0, 0, 0], 1, [1.0, 0.0, 0.0, 0.0], Vector3::z(), &x0, ml, eps);
+        let energy = |p: Vector3<f64>| {
+            let mut d = HyperDual::<4>::constant(0.0);
+            el.derivatives(&[p, p, p, p], false, &mut d);
+            d.value
+        };
+        let mut below_exact = 0;
+        for (slip, dir) in [(3e-3, 0.3), (2e-4, 1.1), (1.5e-4, -2.0), (0.05, 2.5)] {
+            let x = Vector3::new(slip * f64::cos(dir), slip * f64::sin(dir), 0.0);
+            for maj in [true, false] {
+                let mut d = HyperDual::<4>::constant(0.0);
+                el.derivatives(&[x, x0[1], x0[2], x0[3]], maj, &mut d);
+                let g = Vector3::from(d.grad[0]);
+                let h = nalgebra::Matrix3::from_fn(|i, j| d.hess[0][i][0][j]);
+                for k in 0..200 {
+                    // Trial points around and across the stick zone.
+                    let a = 0.1 * k as f64;
+                    let step = Vector3::new(-x.x * (k as f64 / 50.0), -x.y * (k as f64 / 60.0), 0.0)
+                        + Vector3::new(a.cos(), a.sin(), 0.0) * (eps * (k % 7) as f64);
+                    let model = d.value + g.dot(&step) + 0.5 * step.dot(&(h * step));
+                    let truth = energy(x + step);
+                    if maj {
+                        assert!(model >= truth - 1e-12 * ml, "slip {slip}, trial {k}: {model} < {truth}");
+                    } else if model < truth - 1e-9 * ml {
+                        below_exact += 1;
+                    }
+                }
+            }
+        }
+        assert!(below_exact > 0, "the exact model was expected to undershoot somewhere");
     }
 
     /// A re-lag (`friction_iterations` > 1) takes the normal force, tangents and weights from the

@@ -205,6 +205,8 @@ pub struct Contact {
     version: u64,
     relag_pending: bool,
     lag_solves: usize,
+    /// Newton asked for the friction Hessian's majorising stand-in (`use_majorizer_hessian`).
+    friction_majorizer: bool,
     /// Statistics.
     pub stats: ContactStats,
 }
@@ -234,6 +236,7 @@ impl Default for Contact {
             version: 0,
             relag_pending: false,
             lag_solves: 0,
+            friction_majorizer: false,
             stats: ContactStats {
                 min_distance_m: f64::INFINITY,
                 min_ccd_fraction: 1.0,
@@ -1175,7 +1178,7 @@ impl EnergyTerm for Contact {
             );
         } else {
             let f = &self.friction_elements[e - self.pairs.len()];
-            f.derivatives(&Self::stencil_x(&f.nodes, state.x), &mut d);
+            f.derivatives(&Self::stencil_x(&f.nodes, state.x), self.friction_majorizer, &mut d);
         }
         if out.len() == element_stride(4) {
             write_dofs(&d, state.dt, out);
@@ -1215,6 +1218,9 @@ impl EnergyTerm for Contact {
             self.lag_friction(&pairs, state.x, state.x, state.dt);
         }
         self.version += 1;
+    }
+    fn use_majorizer_hessian(&mut self, on: bool) {
+        self.friction_majorizer = on;
     }
     fn prepare_evaluation(&mut self, state: &EvalState) {
         let pairs = self.detect(state.x);

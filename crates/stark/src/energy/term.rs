@@ -80,6 +80,13 @@ pub trait EnergyTerm: Send + Sync {
     /// Called before every evaluation (contact updates its active set here).
     fn prepare_evaluation(&mut self, _state: &EvalState) {}
 
+    /// Newton's globalisation: with `true`, a term whose exact Hessian makes Newton overshoot far
+    /// from the solution may assemble a positive semi-definite stand-in that majorises its
+    /// energy around the iterate (safe full steps, linear convergence); with `false` (the
+    /// default), its exact Hessian (quadratic convergence). Friction is the user: see
+    /// `contact::friction`.
+    fn use_majorizer_hessian(&mut self, _on: bool) {}
+
     /// Called once per step after the first assembly, with the total gradient (DOF space) at
     /// `state`: a term may re-scale itself to balance the others (contact raises its barrier
     /// stiffness to carry the load it is under). Returns whether it changed, so that the solver

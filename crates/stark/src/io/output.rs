@@ -93,6 +93,12 @@ fn io_err(path: &Path, source: std::io::Error) -> StarkError {
     }
 }
 
+/// A mesh label as part of a file name: robot links are labelled `<robot>/<link>`, and a
+/// directory separator in a frame's name would point into a directory that does not exist.
+fn file_label(label: &str) -> String {
+    label.replace(['/', '\\'], "-")
+}
+
 impl Output {
     /// Register a mesh for the frames.
     pub fn add_mesh(&mut self, label: &str, set: NodeSetHandle, cells: OutputCells) {
@@ -119,9 +125,11 @@ impl Output {
                 OutputCells::Triangles(t) => VtkCells::Triangles(t),
                 OutputCells::Tets(t) => VtkCells::Tets(t),
             };
-            // Robot links are labelled `<robot>/<link>`: no directory separator in file names.
-            let file_label = mesh.label.replace(['/', '\\'], "-");
-            let path = directory.join(format!("{name}_{file_label}_{:05}.vtk", self.frames_written));
+            let path = directory.join(format!(
+                "{name}_{}_{:05}.vtk",
+                file_label(&mesh.label),
+                self.frames_written
+            ));
             VtkWriter::new(&self.scratch_x, cells)
                 .title(&format!("{name} {} frame {}", mesh.label, self.frames_written))
                 .point_vectors("velocity", &self.scratch_v)
@@ -158,7 +166,7 @@ impl Output {
                 OutputCells::Triangles(t) => (VtuCells::Triangles(t), t.len()),
                 OutputCells::Tets(t) => (VtuCells::Tets(t), t.len()),
             };
-            let file = format!("{name}_{}_{:05}.vtu", mesh.label, self.frames_written);
+            let file = format!("{name}_{}_{:05}.vtu", file_label(&mesh.label), self.frames_written);
             let path = directory.join(&file);
             let mut w = VtuWriter::new(&nodes.x[r.clone()], cells)
                 .time(time_s)
@@ -184,7 +192,7 @@ impl Output {
                 self.meshes
                     .iter()
                     .enumerate()
-                    .map(move |(k, m)| (t, k, format!("{name}_{}_{f:05}.vtu", m.label)))
+                    .map(move |(k, m)| (t, k, format!("{name}_{}_{f:05}.vtu", file_label(&m.label))))
             })
             .collect();
         let pvd = directory.join(format!("{name}.pvd"));

@@ -259,6 +259,11 @@ pub fn solve(
         report.times.ccd_s += t0.elapsed().as_secs_f64();
     }
 
+    // Far from the solution (until a step is taken in full) the majorising Hessians.
+    let mut majorizer = settings.majorizer_far_from_solution;
+    for t in terms.iter_mut() {
+        t.use_majorizer_hessian(majorizer);
+    }
     let mut first_residual: Option<f64> = None;
     let mut rebalanced = false;
     // The assembly of the current iterate, when the line search already made it (a step
@@ -472,6 +477,18 @@ pub fn solve(
                 residual_n: residual,
                 why,
             });
+        }
+        if settings.majorizer_far_from_solution {
+            // A full step: the model is trusted here, the exact Hessians converge faster. An
+            // exact step cut below a quarter jumped across a regime change (a sliding contact
+            // that sticks at the solution): back to the majorisers.
+            let next = if majorizer { alpha < 1.0 } else { alpha < 0.25 };
+            if next != majorizer {
+                majorizer = next;
+                for t in terms.iter_mut() {
+                    t.use_majorizer_hessian(majorizer);
+                }
+            }
         }
         std::mem::swap(v, &mut ws.trial_v);
         report.iterations = iteration + 1;

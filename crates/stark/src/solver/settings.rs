@@ -53,6 +53,12 @@ pub struct NewtonSettings {
     /// When element Hessians are projected (default: on demand). Terms whose Hessians are always
     /// indefinite near their active set (contact barriers) project regardless.
     pub projection: Projection,
+    /// Far from the solution, assemble the majorising stand-ins that terms offer for their
+    /// Hessians (sliding friction: curvature along the slip too, so that a step cannot jump
+    /// across a solution that sticks), and the exact Hessians once a step was taken in full;
+    /// back to the stand-ins after an exact step had to be cut below a quarter (default: true).
+    /// Off: exact Hessians throughout.
+    pub majorizer_far_from_solution: bool,
 }
 
 impl Default for NewtonSettings {
@@ -67,6 +73,7 @@ impl Default for NewtonSettings {
             armijo: 1e-4,
             max_line_search_iterations: 30,
             projection: Projection::OnDemand,
+            majorizer_far_from_solution: true,
         }
     }
 }
