@@ -70,6 +70,7 @@ pub struct StepReport {
 
 /// Totals of a run.
 #[derive(Clone, Debug, Default, Serialize, serde::Deserialize)]
+#[serde(default)]
 pub struct RunSummary {
     /// Simulation name.
     pub scene: String,

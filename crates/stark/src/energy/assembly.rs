@@ -25,6 +25,10 @@ type LayoutKey = (Vec<(u64, usize, usize)>, usize);
 /// No matrix slot (padding, or a block of the lower triangle).
 const NO_SLOT: u32 = u32::MAX;
 
+/// A pattern that needs to grow keeps its old blocks while it has fewer than this factor times
+/// the blocks in use.
+const STICKY_PATTERN_GROWTH: f64 = 1.2;
+
 /// Colours of a greedy colouring; chunks that would need more go to a serial group.
 const MAX_COLORS: usize = 64;
 
@@ -129,9 +133,7 @@ fn merge_sorted(a: &[(u32, u32)], b: &[(u32, u32)]) -> Vec<(u32, u32)> {
 }
 
 fn slot_of(matrix: &BlockSparseMatrix, r: u32, c: u32) -> u32 {
-    let row = matrix.row_start[r as usize]..matrix.row_start[r as usize + 1];
-    let k = matrix.cols[row.clone()].binary_search(&c).expect("block in pattern");
-    (row.start + k) as u32
+    matrix.find(r, c).expect("block in pattern") as u32
 }
 
 impl Assembler {
@@ -199,13 +201,39 @@ impl Assembler {
                 ..Default::default()
             };
         }
-        // Merge the sorted pair lists of all terms and the diagonal.
-        let mut pairs: Vec<(u32, u32)> = (0..n_blocks as u32).map(|b| (b, b)).collect();
-        for layout in &self.layouts {
-            pairs = merge_sorted(&pairs, &layout.pairs);
+        // The pattern only grows while the terms' blocks fit in it: a contact pair that comes
+        // and goes between Newton iterations keeps its blocks (as zeros), so the pattern, the
+        // other terms' slots and the linear solver's analysis stay.
+        let fits = self.matrix.n_blocks == n_blocks
+            && !self.matrix.row_start.is_empty()
+            && self
+                .layouts
+                .iter()
+                .zip(&changed)
+                .filter(|(_, &c)| c)
+                .all(|(layout, _)| layout.pairs.iter().all(|&(r, c)| self.matrix.find(r, c).is_some()));
+        let same_pattern = fits;
+        if !fits {
+            // Merge the sorted pair lists of all terms and the diagonal; keep the old pattern's
+            // blocks too while they are few (the pairs that come and go), not when the contacts
+            // have moved on.
+            let mut pairs: Vec<(u32, u32)> = (0..n_blocks as u32).map(|b| (b, b)).collect();
+            for layout in &self.layouts {
+                pairs = merge_sorted(&pairs, &layout.pairs);
+            }
+            if self.matrix.n_blocks == n_blocks
+                && (self.matrix.nnz_blocks() as f64) < STICKY_PATTERN_GROWTH * pairs.len() as f64
+            {
+                pairs = merge_sorted(&pairs, &self.matrix.pattern_pairs());
+            }
+            self.matrix = BlockSparseMatrix::from_sorted_pairs(n_blocks, &pairs);
+            self.mirror = pairs
+                .iter()
+                .map(|&(r, c)| (r > c).then(|| slot_of(&self.matrix, c, r)))
+                .collect();
+            self.pattern_id = NEXT_PATTERN_ID.fetch_add(1, Ordering::Relaxed);
         }
-        let matrix = BlockSparseMatrix::from_sorted_pairs(n_blocks, &pairs);
-        let same_pattern = matrix.row_start == self.matrix.row_start && matrix.cols == self.matrix.cols;
+        let matrix = &self.matrix;
 
         // Slot maps (when the pattern or the term changed) and colours (when the term changed).
         for ((layout, t), &changed) in self.layouts.iter_mut().zip(terms).zip(&changed) {
@@ -218,7 +246,7 @@ impl Assembler {
                     for a in 0..m {
                         for b in 0..m {
                             if st[a] != NO_DOF && st[b] != NO_DOF && st[a] <= st[b] {
-                                layout.slots[(e * m + a) * m + b] = slot_of(&matrix, st[a], st[b]);
+                                layout.slots[(e * m + a) * m + b] = slot_of(matrix, st[a], st[b]);
                             }
                         }
                     }
@@ -251,15 +279,6 @@ impl Assembler {
             }
             layout.colors = colors;
         }
-        self.mirror = pairs
-            .iter()
-            .map(|&(r, c)| (r > c).then(|| slot_of(&matrix, c, r)))
-            .collect();
-
-        if !same_pattern || self.pattern_id == 0 {
-            self.pattern_id = NEXT_PATTERN_ID.fetch_add(1, Ordering::Relaxed);
-        }
-        self.matrix = matrix;
         self.key = Some(key);
         self.rebuilds += 1;
     }
@@ -354,5 +373,128 @@ impl Assembler {
         }
         self.timing.1 += t1.elapsed().as_secs_f64();
         sum
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::state::{BodyArrays, NodeArrays};
+    use nalgebra::Vector3;
+
+    /// Springs `½|v_a − v_b|²` between the given node pairs; the pairs may change (like contact).
+    struct Springs {
+        pairs: Vec<[u32; 2]>,
+        version: u64,
+    }
+
+    impl EnergyTerm for Springs {
+        fn name(&self) -> &str {
+            "springs"
+        }
+        fn num_elements(&self) -> usize {
+            self.pairs.len()
+        }
+        fn stencil_width(&self, _state: &EvalState) -> usize {
+            2
+        }
+        fn write_stencils(&self, _state: &EvalState, out: &mut [u32]) {
+            for (o, p) in out.chunks_exact_mut(2).zip(&self.pairs) {
+                o.copy_from_slice(p);
+            }
+        }
+        fn topology_version(&self) -> u64 {
+            self.version
+        }
+        fn energy(&self, state: &EvalState) -> f64 {
+            self.pairs
+                .iter()
+                .map(|&[a, b]| 0.5 * (state.v[a as usize] - state.v[b as usize]).norm_squared())
+                .sum()
+        }
+        fn evaluate_element(&self, e: usize, state: &EvalState, _mode: EvalMode, out: &mut [f64]) {
+            let [a, b] = self.pairs[e];
+            let d = state.v[a as usize] - state.v[b as usize];
+            out.iter_mut().for_each(|o| *o = 0.0);
+            out[0] = 0.5 * d.norm_squared();
+            for i in 0..3 {
+                out[1 + i] = d[i];
+                out[4 + i] = -d[i];
+                // Blocks (0,0), (1,1): +I; (0,1), (1,0): −I.
+                for (blk, sign) in [(0, 1.0), (1, -1.0), (2, -1.0), (3, 1.0)] {
+                    out[7 + 9 * blk + 4 * i] = sign;
+                }
+            }
+        }
+    }
+
+    fn assemble(assembler: &mut Assembler, term: &Springs, nodes: &NodeArrays) -> Vec<Vec<f64>> {
+        let bodies = BodyArrays::default();
+        let v: Vec<Vector3<f64>> = (0..nodes.len())
+            .map(|i| Vector3::new(i as f64, 1.0, -(i as f64)))
+            .collect();
+        let state = EvalState {
+            dt: 0.01,
+            time: 0.01,
+            gravity: Vector3::zeros(),
+            nodes,
+            v: &v,
+            x: &nodes.x,
+            bodies: &bodies,
+            poses: &[],
+        };
+        let dofs = DofMap::new(nodes, &bodies);
+        let mut gradient = vec![0.0; 3 * dofs.len()];
+        assembler.assemble(
+            &[term as &dyn EnergyTerm],
+            &state,
+            &dofs,
+            EvalMode::ExactHessian,
+            &mut gradient,
+        );
+        assembler.matrix.to_dense()
+    }
+
+    /// Pairs that come and go keep the pattern (their blocks stay, as zeros): the linear solver's
+    /// analysis is reused. The matrix is the one a fresh assembly gives; a new block grows it.
+    #[test]
+    fn the_pattern_keeps_blocks_that_come_and_go_and_grows_for_new_ones() {
+        let mut nodes = NodeArrays::default();
+        nodes.push(&[Vector3::zeros(); 5]);
+        let mut term = Springs {
+            pairs: vec![[0, 1], [1, 2], [3, 4]],
+            version: 1,
+        };
+        let mut sticky = Assembler::default();
+        let fresh = |term: &Springs| assemble(&mut Assembler::default(), term, &nodes);
+        assert_eq!(assemble(&mut sticky, &term, &nodes), fresh(&term));
+        let first = sticky.pattern_id;
+        let blocks = sticky.matrix.nnz_blocks();
+
+        term.pairs = vec![[0, 1], [3, 4]];
+        term.version = 2;
+        assert_eq!(assemble(&mut sticky, &term, &nodes), fresh(&term));
+        assert_eq!(sticky.pattern_id, first, "a subset keeps the pattern");
+        assert_eq!(sticky.matrix.nnz_blocks(), blocks);
+
+        term.pairs = vec![[0, 1], [1, 2], [3, 4]];
+        term.version = 3;
+        assert_eq!(assemble(&mut sticky, &term, &nodes), fresh(&term));
+        assert_eq!(sticky.pattern_id, first, "a pair that comes back finds its blocks");
+
+        // A new block grows the pattern; the old blocks stay while they are few.
+        term.pairs = vec![[0, 4], [1, 2], [3, 4]];
+        term.version = 4;
+        assert_eq!(assemble(&mut sticky, &term, &nodes), fresh(&term));
+        let grown = sticky.pattern_id;
+        assert_ne!(grown, first, "a new block changes the pattern");
+        assert!(sticky.matrix.find(0, 4).is_some() && sticky.matrix.find(0, 1).is_some());
+
+        // When the contacts have moved on (most of the pattern unused), it is rebuilt tight.
+        term.pairs = vec![[0, 2]];
+        term.version = 5;
+        assert_eq!(assemble(&mut sticky, &term, &nodes), fresh(&term));
+        assert_ne!(sticky.pattern_id, grown);
+        assert_eq!(sticky.matrix.nnz_blocks(), 5 + 2);
     }
 }

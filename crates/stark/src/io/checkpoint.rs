@@ -21,7 +21,8 @@
 //!
 //! The file is a postcard-encoded [`CheckpointHeader`] (magic, format version, a hash of the
 //! scene's structure, where the scene came from, the state's length and checksum) followed by the
-//! postcard-encoded state. Reading checks each in turn, so a file of another scene, a truncated
+//! postcard-encoded state; the settings and the run's totals inside it carry their field names,
+//! so that a checkpoint resumes in a build that added a setting (it takes its default). Reading checks each in turn, so a file of another scene, a truncated
 //! file or one of another format version is refused with a message saying which.
 
 use crate::error::{Result, StarkError};
@@ -32,7 +33,7 @@ use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
 /// The format version this build writes and reads.
-pub const CHECKPOINT_FORMAT_VERSION: u32 = 1;
+pub const CHECKPOINT_FORMAT_VERSION: u32 = 2;
 
 /// First bytes of every checkpoint file.
 const MAGIC: [u8; 8] = *b"STARKCKP";
@@ -83,15 +84,37 @@ pub struct CheckpointHeader {
 pub(crate) struct SimulationState {
     pub nodes: NodeArrays,
     pub bodies: BodyArrays,
+    /// Self-describing (field names), so that a checkpoint still resumes after a new setting
+    /// (with its default) or a new summary counter was added.
+    #[serde(with = "self_describing")]
     pub settings: Settings,
     pub time_s: f64,
     pub dt_s: f64,
+    #[serde(with = "self_describing")]
     pub summary: RunSummary,
     pub frames_written: usize,
     pub next_frame_time_s: f64,
     pub frame_times_s: Vec<f64>,
     /// Each term's name and saved state, in the simulation's term order.
     pub terms: Vec<(String, Vec<u8>)>,
+}
+
+/// A value as MessagePack with field names inside the postcard stream (MessagePack keeps
+/// infinities and every bit of a float, unlike JSON); missing fields take their defaults.
+mod self_describing {
+    use serde::de::{DeserializeOwned, Error as _};
+    use serde::ser::Error as _;
+    use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+    pub fn serialize<T: Serialize, S: Serializer>(value: &T, s: S) -> Result<S::Ok, S::Error> {
+        let bytes = rmp_serde::to_vec_named(value).map_err(S::Error::custom)?;
+        bytes.serialize(s)
+    }
+
+    pub fn deserialize<'de, T: DeserializeOwned, D: Deserializer<'de>>(d: D) -> Result<T, D::Error> {
+        let bytes = Vec::<u8>::deserialize(d)?;
+        rmp_serde::from_slice(&bytes).map_err(D::Error::custom)
+    }
 }
 
 /// FNV-1a, 64 bit: a stable hash (the standard library's is not stable across builds).
@@ -238,4 +261,44 @@ pub(crate) fn read(path: &Path, scene_hash: u64, scene: &str) -> Result<(Checkpo
     let state: SimulationState =
         postcard::from_bytes(body).map_err(|e| err(path, format!("the state does not decode: {e}")))?;
     Ok((header, state))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A checkpoint written before a setting existed resumes with that setting's default.
+    #[test]
+    fn settings_missing_a_field_decode_with_its_default() {
+        #[derive(Serialize, Deserialize)]
+        struct Holder {
+            #[serde(with = "self_describing")]
+            settings: Settings,
+        }
+        let mut settings = Settings::default();
+        settings.newton.residual_tolerance_n = 3e-7;
+        settings.newton.majorizer_far_from_solution = false;
+        let mut older = serde_json::to_value(&settings).unwrap();
+        older["newton"]
+            .as_object_mut()
+            .unwrap()
+            .remove("majorizer_far_from_solution");
+        #[derive(Serialize)]
+        struct OlderHolder(#[serde(with = "bytes_of")] serde_json::Value);
+        mod bytes_of {
+            pub fn serialize<S: serde::Serializer>(v: &serde_json::Value, s: S) -> Result<S::Ok, S::Error> {
+                serde::Serialize::serialize(&rmp_serde::to_vec_named(v).unwrap(), s)
+            }
+        }
+        let file = postcard::to_allocvec(&OlderHolder(older)).unwrap();
+        let back: Holder = postcard::from_bytes(&file).unwrap();
+        assert_eq!(back.settings.newton.residual_tolerance_n, 3e-7);
+        assert!(back.settings.newton.majorizer_far_from_solution, "the default");
+        // And the current settings round-trip exactly.
+        let file = postcard::to_allocvec(&Holder {
+            settings: settings.clone(),
+        })
+        .unwrap();
+        assert_eq!(postcard::from_bytes::<Holder>(&file).unwrap().settings, settings);
+    }
 }

@@ -58,6 +58,23 @@ impl BlockSparseMatrix {
         }
     }
 
+    /// Index of block `(r, c)` in `values`, if it is in the pattern.
+    pub fn find(&self, r: u32, c: u32) -> Option<usize> {
+        let row = self.row_start[r as usize]..self.row_start[r as usize + 1];
+        self.cols[row.clone()].binary_search(&c).ok().map(|k| row.start + k)
+    }
+
+    /// The pattern as sorted `(row, column)` block pairs.
+    pub fn pattern_pairs(&self) -> Vec<(u32, u32)> {
+        (0..self.n_blocks)
+            .flat_map(|r| {
+                self.cols[self.row_start[r]..self.row_start[r + 1]]
+                    .iter()
+                    .map(move |&c| (r as u32, c))
+            })
+            .collect()
+    }
+
     /// Number of scalar rows.
     pub fn dim(&self) -> usize {
         3 * self.n_blocks

@@ -1,17 +1,18 @@
 //! Sparse Cholesky (faer `LLᵀ`), with the symbolic analysis (ordering, elimination tree) reused
-//! while the sparsity pattern is unchanged.
+//! while the sparsity pattern is unchanged, and the factor's values and the workspace kept
+//! between factorisations (a fresh allocation of tens of MB each time costs page faults).
 
 use super::block_sparse::BlockSparseMatrix;
-use faer::linalg::solvers::Solve;
-use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
+use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, SymbolicCholesky};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
-use faer::{MatMut, Side};
+use faer::{Conj, MatMut, Par, Side};
 
 /// Cached analysis of one pattern.
 struct Analysis {
     pattern_id: u64,
     symbolic_matrix: SymbolicSparseColMat<usize>,
-    symbolic_llt: SymbolicLlt<usize>,
+    symbolic_llt: SymbolicCholesky<usize>,
     /// For each scalar lower-triangle entry (column-major order), where to read it:
     /// `(block index, entry within the block)`.
     source: Vec<(u32, u8)>,
@@ -22,6 +23,10 @@ struct Analysis {
 pub struct CholeskySolver {
     analysis: Option<Analysis>,
     values: Vec<f64>,
+    /// The factor's values.
+    factor: Vec<f64>,
+    /// Workspace of the factorisation and the solve, and the parallelism it was sized for.
+    workspace: Option<(MemBuffer, Par)>,
     /// Number of symbolic analyses performed (for logs and tests).
     pub analyses: usize,
 }
@@ -68,8 +73,13 @@ impl CholeskySolver {
             col_ptr.push(row_idx.len());
         }
         let symbolic_matrix = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
-        let symbolic_llt = SymbolicLlt::try_new(symbolic_matrix.as_ref(), Side::Lower)
-            .map_err(|e| CholeskyError::Analysis(format!("{e:?}")))?;
+        let symbolic_llt = factorize_symbolic_cholesky(
+            symbolic_matrix.as_ref(),
+            Side::Lower,
+            Default::default(),
+            Default::default(),
+        )
+        .map_err(|e| CholeskyError::Analysis(format!("{e:?}")))?;
         Ok(Analysis {
             pattern_id,
             symbolic_matrix,
@@ -87,20 +97,52 @@ impl CholeskySolver {
         b: &[f64],
         x: &mut [f64],
     ) -> Result<(), CholeskyError> {
+        // The thread pool the solve runs in (one thread: no parallel overhead at all).
+        let par = match rayon::current_num_threads() {
+            1 => Par::Seq,
+            n => Par::rayon(n),
+        };
         if self.analysis.as_ref().map(|an| an.pattern_id) != Some(pattern_id) {
             self.analysis = Some(Self::analyse(a, pattern_id)?);
             self.analyses += 1;
+            self.workspace = None;
         }
         let an = self.analysis.as_ref().expect("analysis present");
+        if self.workspace.as_ref().map(|w| w.1) != Some(par) {
+            let symbolic = &an.symbolic_llt;
+            let req = StackReq::any_of(&[
+                symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()),
+                symbolic.solve_in_place_scratch::<f64>(1, par),
+            ]);
+            let buffer = MemBuffer::try_new(req).map_err(|e| CholeskyError::Analysis(format!("workspace: {e:?}")))?;
+            self.workspace = Some((buffer, par));
+        }
+        let (buffer, _) = self.workspace.as_mut().expect("workspace present");
         self.values.clear();
         self.values
             .extend(an.source.iter().map(|&(blk, e)| a.values[blk as usize][e as usize]));
+        self.factor.resize(an.symbolic_llt.len_val(), 0.0);
         let mat = SparseColMatRef::new(an.symbolic_matrix.as_ref(), &self.values);
-        let llt = Llt::try_new_with_symbolic(an.symbolic_llt.clone(), mat, Side::Lower)
+        let llt = an
+            .symbolic_llt
+            .factorize_numeric_llt(
+                &mut self.factor,
+                mat,
+                Side::Lower,
+                Default::default(),
+                par,
+                MemStack::new(buffer),
+                Default::default(),
+            )
             .map_err(|e| CholeskyError::NotPositiveDefinite(format!("{e:?}")))?;
         x.copy_from_slice(b);
         let n = x.len();
-        llt.solve_in_place(MatMut::from_column_major_slice_mut(x, n, 1));
+        llt.solve_in_place_with_conj(
+            Conj::No,
+            MatMut::from_column_major_slice_mut(x, n, 1),
+            par,
+            MemStack::new(buffer),
+        );
         Ok(())
     }
 }
