@@ -272,7 +272,7 @@ mirror! {
         friction_stick_slide_threshold_m_s: f64,
         /// Friction solves per step (default: 1).
         friction_iterations: usize,
-        /// Barrier pair Hessian: "exact", "projected" or "gauss_newton" (default: "projected").
+        /// Barrier pair Hessian: "exact", "projected", "gauss_newton" or "adaptive" (default: "adaptive").
         hessian: Choice<stark::contact::PairHessian>,
         /// Continuous collision detection in the line search (default: True).
         ccd: bool,

@@ -157,11 +157,11 @@ class ContactSettings:
     """Relative speed below which friction sticks, m/s: a held body creeps slower than this (default: 1e-4)."""
     friction_iterations: int
     """Friction solves per step (default: 1)."""
-    hessian: Literal["exact", "projected", "gauss_newton"]
-    """Barrier pair Hessian: "exact", "projected" or "gauss_newton" (default: "projected")."""
+    hessian: Literal["exact", "projected", "gauss_newton", "adaptive"]
+    """Barrier pair Hessian: "exact", "projected", "gauss_newton" or "adaptive" (default: "adaptive")."""
     ccd: bool
     """Continuous collision detection in the line search (default: True)."""
-    def __new__(cls, *, default_thickness_m: Optional[float] = ..., barrier: Literal["log", "cubic"] = ..., stiffness: Optional[float] = ..., min_distance_fraction: float = ..., max_stiffness_factor: float = ..., friction_stick_slide_threshold_m_s: float = ..., friction_iterations: int = ..., hessian: Literal["exact", "projected", "gauss_newton"] = ..., ccd: bool = ...) -> ContactSettings:
+    def __new__(cls, *, default_thickness_m: Optional[float] = ..., barrier: Literal["log", "cubic"] = ..., stiffness: Optional[float] = ..., min_distance_fraction: float = ..., max_stiffness_factor: float = ..., friction_stick_slide_threshold_m_s: float = ..., friction_iterations: int = ..., hessian: Literal["exact", "projected", "gauss_newton", "adaptive"] = ..., ccd: bool = ...) -> ContactSettings:
         """Defaults of the library, with the given fields replaced."""
     def to_dict(self) -> dict[str, Any]:
         """The fields as a plain dict (nested settings as nested dicts)."""

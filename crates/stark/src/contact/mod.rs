@@ -65,7 +65,7 @@ pub struct ContactSettings {
     /// Friction solves per step: 1 lags normal forces and tangents once from the start of the
     /// step; more re-lag them from the converged state and solve again (default: 1).
     pub friction_iterations: usize,
-    /// Positive semi-definite Hessian used for barrier pairs (default: projected).
+    /// Positive semi-definite Hessian used for barrier pairs (default: adaptive).
     pub hessian: PairHessian,
     /// Continuous collision detection in the line search (default: true). Without it only the
     /// barrier keeps pairs apart, which fast motion can tunnel through.
@@ -82,7 +82,7 @@ impl Default for ContactSettings {
             max_stiffness_factor: 1e8,
             friction_stick_slide_threshold_m_s: 1e-4,
             friction_iterations: 1,
-            hessian: PairHessian::Projected,
+            hessian: PairHessian::Adaptive,
             ccd: true,
         }
     }

@@ -225,7 +225,19 @@ pub enum PairHessian {
     /// (`b'' > 0`). It drops `κ b'(d) ∇²d`, the part from the curvature of the distance, whose
     /// negative directions projection would remove anyway; about 10× cheaper than projecting.
     GaussNewton,
+    /// Gauss–Newton where the distance's curvature term `C = κ b'(d) ∇²d` is below a tenth of
+    /// the normal stiffness `κ b''(d) |∇d|²` in norm (a point over the inside of a triangle, or
+    /// crossing edges, much closer than their size), projected elsewhere (near corners and edge
+    /// ends, where the distance curves like the distance to a point). Where it takes Gauss–Newton
+    /// it differs from the projected Hessian by at most `‖C‖`: projecting `GN + C` onto the PSD
+    /// cone moves it by no more than `C` moved `GN`, which was already PSD. Costs like
+    /// Gauss–Newton on resting cloth, converges like projection (the default).
+    Adaptive,
 }
+
+/// [`PairHessian::Adaptive`]: the largest curvature term, relative to the normal stiffness, for
+/// which a pair takes the Gauss–Newton form.
+pub const ADAPTIVE_CURVATURE_RATIO: f64 = 0.1;
 
 /// Value, gradient and Hessian of a pair's energy with respect to its four node positions
 /// (unused nodes get zeros). Returns the distance `d`, m.
@@ -237,7 +249,6 @@ pub fn pair_derivatives(
     hessian: PairHessian,
     out: &mut HyperDual<4>,
 ) -> f64 {
-    let project = hessian == PairHessian::Projected;
     let (dist, idx) = pair.kind.distance();
     let m = dist.len();
     let mut flat = [0.0; 12];
@@ -254,10 +265,34 @@ pub fn pair_derivatives(
     let e1 = kappa * db / (2.0 * d);
     let e2 = kappa * (ddb - db / d) / (4.0 * d * d);
     // Energy in the sub-stencil's coordinates.
-    let n = 3 * m;
     let mut g = [0.0; 12];
     let mut h = [0.0; 144];
-    let gauss_newton = hessian == PairHessian::GaussNewton && !matches!(pair.kind, PairKind::EdgeEdgeMollified(_));
+    let n = 3 * m;
+    let mollified = matches!(pair.kind, PairKind::EdgeEdgeMollified(_));
+    let gauss_newton = !mollified
+        && b != 0.0
+        && match hessian {
+            PairHessian::GaussNewton => true,
+            PairHessian::Adaptive => {
+                // ‖κ b' ∇²d‖_F against the normal stiffness κ b'' |∇d|², with ∇d = ∇s/(2d) and
+                // ∇²d = (∇²s − ∇s∇sᵀ/(2s))/(2d).
+                let mut curvature_sq = 0.0;
+                for i in 0..n {
+                    for j in 0..n {
+                        curvature_sq += (hs[i * n + j] - gs[i] * gs[j] / (2.0 * s)).powi(2);
+                    }
+                }
+                let curvature = (kappa * db / (2.0 * d)).abs() * curvature_sq.sqrt();
+                let normal = kappa * ddb * gs[..n].iter().map(|v| v * v).sum::<f64>() / (4.0 * d * d);
+                curvature <= ADAPTIVE_CURVATURE_RATIO * normal
+            }
+            PairHessian::Exact | PairHessian::Projected => false,
+        };
+    let project = match hessian {
+        PairHessian::Projected => true,
+        PairHessian::Adaptive => !gauss_newton,
+        PairHessian::Exact | PairHessian::GaussNewton => false,
+    };
     if b != 0.0 {
         if gauss_newton {
             // ∇d = ∇s/(2d): κ b'' ∇d∇dᵀ = κ b''/(4d²) ∇s∇sᵀ.
@@ -312,7 +347,7 @@ pub fn pair_derivatives(
                 oh[i * 12 + j] = mo * hb[i * 12 + j] + e * hm + gb[i] * gm_j + gm_i * gb[j];
             }
         }
-        if project || hessian == PairHessian::GaussNewton {
+        if hessian != PairHessian::Exact {
             // Distances and the mollifier's edge cross product are translation invariant.
             project_psd_translation_invariant(oh, 4);
         }
@@ -425,6 +460,89 @@ mod tests {
                     };
                     check(&pair, &x, barrier_kind);
                 }
+            }
+        }
+    }
+
+    /// The adaptive Hessian is positive semi-definite, equals the projected one where the
+    /// distance curves strongly (point–point) and is within the stated bound of it where it takes
+    /// Gauss–Newton (a point just above a large triangle, crossing edges far apart from their
+    /// ends: both common in resting cloth).
+    #[test]
+    fn adaptive_hessian_is_psd_and_near_the_projected_one() {
+        use crate::energy::psd::is_positive_semidefinite;
+        let flat = |h: &HyperDual<4>| h.hess.as_flattened().as_flattened().as_flattened().to_vec();
+        let pair = |kind| ContactPair {
+            kind,
+            nodes: [0, 1, 2, 3],
+            dhat: 1e-3,
+            eps_x: 1e-12,
+            mu: 0.0,
+            kappa: 1.0,
+            objects: [0, 0],
+            multiplicity: 1.0,
+        };
+        let cases = [
+            // A point 0.3 mm above the inside of a 1 cm triangle.
+            (
+                PairKind::PointTriangle,
+                [
+                    [0.002, 0.003, 3e-4],
+                    [0.0, 0.0, 0.0],
+                    [0.01, 0.0, 0.0],
+                    [0.0, 0.01, 0.0],
+                ],
+                true,
+            ),
+            // Two crossing 1 cm edges 0.4 mm apart.
+            (
+                PairKind::EdgeEdge,
+                [
+                    [-0.005, 0.0, 4e-4],
+                    [0.005, 0.001, 4e-4],
+                    [0.0, -0.005, 0.0],
+                    [0.001, 0.005, 0.0],
+                ],
+                true,
+            ),
+            // Two points: the distance curves like 1/d, always projected.
+            (
+                PairKind::PointPoint,
+                [[0.0, 0.0, 3e-4], [1e-4, 0.0, 0.0], [0.0; 3], [0.0; 3]],
+                false,
+            ),
+        ];
+        for (kind, points, expect_gauss_newton) in cases {
+            let x = points.map(Vector3::from);
+            let p = pair(kind);
+            let mut adaptive = HyperDual::<4>::constant(0.0);
+            let mut projected = HyperDual::<4>::constant(0.0);
+            let mut gauss_newton = HyperDual::<4>::constant(0.0);
+            pair_derivatives(&p, &x, 1e4, BarrierKind::Log, PairHessian::Adaptive, &mut adaptive);
+            pair_derivatives(&p, &x, 1e4, BarrierKind::Log, PairHessian::Projected, &mut projected);
+            pair_derivatives(
+                &p,
+                &x,
+                1e4,
+                BarrierKind::Log,
+                PairHessian::GaussNewton,
+                &mut gauss_newton,
+            );
+            let (a, pr, gn) = (flat(&adaptive), flat(&projected), flat(&gauss_newton));
+            assert!(is_positive_semidefinite(&a, 12), "{kind:?}");
+            assert_eq!(adaptive.gradient_flat(), projected.gradient_flat());
+            if expect_gauss_newton {
+                assert_eq!(a, gn, "{kind:?} takes Gauss–Newton");
+                // ‖H_adaptive − H_projected‖ ≤ 0.1 × the normal stiffness (the Gauss–Newton
+                // matrix's only eigenvalue, its trace).
+                let normal: f64 = (0..12).map(|i| gn[13 * i]).sum();
+                let diff = a.iter().zip(&pr).map(|(u, v)| (u - v).powi(2)).sum::<f64>().sqrt();
+                assert!(
+                    diff <= ADAPTIVE_CURVATURE_RATIO * normal,
+                    "{kind:?}: {diff} vs {normal}"
+                );
+            } else {
+                assert_eq!(a, pr, "{kind:?} is projected");
             }
         }
     }

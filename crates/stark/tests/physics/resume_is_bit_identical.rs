@@ -189,12 +189,18 @@ fn wrong_scene_truncated_file_and_other_version_are_refused() {
     assert!(e.contains("truncated"), "{e}");
 
     // The format version is the varint right after the 8-byte magic.
-    let mut v2 = bytes.clone();
-    v2[8] = 2;
-    let other_version = dir.path().join("v2.ckpt");
-    std::fs::write(&other_version, &v2).unwrap();
+    let this_version = bytes[8];
+    assert_eq!(u32::from(this_version), stark::io::CHECKPOINT_FORMAT_VERSION);
+    let mut next = bytes.clone();
+    next[8] = this_version + 1;
+    let other_version = dir.path().join("next.ckpt");
+    std::fs::write(&other_version, &next).unwrap();
     let e = fresh.restore_checkpoint(&other_version).unwrap_err().to_string();
-    assert!(e.contains("format version 2") && e.contains("reads version 1"), "{e}");
+    assert!(
+        e.contains(&format!("format version {}", this_version + 1))
+            && e.contains(&format!("reads version {this_version}")),
+        "{e}"
+    );
 
     let e = fresh
         .restore_checkpoint(dir.path().join("missing.ckpt"))
