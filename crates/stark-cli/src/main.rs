@@ -60,10 +60,6 @@ enum Command {
         /// Write legacy VTK frames (velocity only) instead of VTU with fields and a .pvd series.
         #[arg(long)]
         legacy_vtk: bool,
-        /// After every step, check independently that no contact edge crosses a contact triangle
-        /// and count inverted tetrahedra; the run fails at the first intersection.
-        #[arg(long)]
-        check: bool,
     },
     /// Continue a run from a checkpoint (written by `--checkpoint-every` or on Ctrl-C).
     Resume {
@@ -87,6 +83,9 @@ enum Command {
     Sweep {
         /// The sweep file (TOML).
         file: PathBuf,
+        /// Only write the summary of the cases finished so far (runs nothing).
+        #[arg(long)]
+        summary_only: bool,
     },
     /// List the built-in scenes.
     List,
@@ -145,6 +144,10 @@ struct RunOptions {
     /// Do not write the summary plot `<out>/<scene>.summary.png`.
     #[arg(long)]
     no_plot: bool,
+    /// After every step, check independently that no contact edge crosses a contact triangle
+    /// and count inverted tetrahedra; the run fails at the first intersection.
+    #[arg(long)]
+    check: bool,
 }
 
 fn base_settings(out: PathBuf, threads: usize, frames: bool) -> Settings {
@@ -555,7 +558,6 @@ fn run(
     summary_json: Option<PathBuf>,
     frames: bool,
     legacy_vtk: bool,
-    check: bool,
 ) -> stark::Result<ExitCode> {
     install_interrupt_handler()?;
     let format = if legacy_vtk {
@@ -601,7 +603,7 @@ fn run(
         if several {
             println!("== {}", sim.settings.name);
         }
-        let (summary, interrupted) = run_built(&mut sim, duration.unwrap_or(scene_duration), &opts, check)?;
+        let (summary, interrupted) = run_built(&mut sim, duration.unwrap_or(scene_duration), &opts, opts.check)?;
         summaries.push(summary);
         if interrupted {
             break;
@@ -670,7 +672,7 @@ fn resume(
         "resuming              {} at t = {:.4} s (step {})",
         header.scene, header.time_s, header.steps
     );
-    let (summary, interrupted) = run_built(&mut sim, duration, &opts, false)?;
+    let (summary, interrupted) = run_built(&mut sim, duration, &opts, opts.check)?;
     if let Some(path) = summary_json {
         write_summary_json(&path, &summary)?;
     }
@@ -809,7 +811,6 @@ fn main() -> ExitCode {
             summary_json,
             no_frames,
             legacy_vtk,
-            check,
         } => run(
             scene_files,
             scene,
@@ -820,7 +821,6 @@ fn main() -> ExitCode {
             summary_json,
             !no_frames,
             legacy_vtk,
-            check,
         ),
         Command::Resume {
             checkpoint,
@@ -829,7 +829,9 @@ fn main() -> ExitCode {
             opts,
             summary_json,
         } => resume(checkpoint, duration, out, opts, summary_json),
-        Command::Sweep { file } => sweep::sweep(&file).map(|ok| if ok { ExitCode::SUCCESS } else { ExitCode::FAILURE }),
+        Command::Sweep { file, summary_only } => {
+            sweep::sweep(&file, summary_only).map(|ok| if ok { ExitCode::SUCCESS } else { ExitCode::FAILURE })
+        }
         Command::List => {
             list();
             Ok(ExitCode::SUCCESS)

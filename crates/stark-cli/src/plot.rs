@@ -22,7 +22,7 @@ struct Series {
     points: Vec<(f64, f64)>,
 }
 
-fn register_font() {
+pub(crate) fn register_font() {
     static ONCE: Once = Once::new();
     ONCE.call_once(|| {
         // The bundled font replaces any system font lookup.

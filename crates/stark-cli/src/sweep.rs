@@ -1,6 +1,8 @@
 //! `stark sweep FILE`: a set of runs (a base scene and a grid of values) as independent processes,
 //! `jobs` at a time with `threads` each, resumable: a case whose result file exists is skipped,
-//! and a case with a checkpoint continues from it. Ends with a summary (markdown and JSON).
+//! and a case with a checkpoint continues from it. Ends with a summary (markdown, JSON and a PNG
+//! grid of the cases' final-state pictures). Every case runs with `--check` (an independent
+//! intersection and inversion test after each step).
 //!
 //! A sweep file (TOML):
 //!
@@ -86,6 +88,10 @@ pub struct CaseResult {
     /// The lab's outcome of a robot–towel case (Table I).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub lab_outcome: Option<char>,
+    /// Every step was checked for intersections and inverted elements (`stark run --check`; a
+    /// failed check fails the case).
+    #[serde(default)]
+    pub checked_every_step: bool,
 }
 
 fn bad(m: String) -> stark::StarkError {
@@ -187,6 +193,7 @@ pub fn cases(file: &Path) -> stark::Result<(Vec<Case>, SweepPlan)> {
             threads: s.threads,
             checkpoint_every_s: s.checkpoint_every_s,
             duration_s: s.duration_s,
+            grid_rows: s.grid.values().last().map_or(1, Vec::len),
         },
     ))
 }
@@ -200,6 +207,9 @@ pub struct SweepPlan {
     threads: usize,
     checkpoint_every_s: f64,
     duration_s: Option<f64>,
+    /// Rows of the picture grid: the values of the fastest-varying grid key (the floors of the
+    /// robot–towel suite); the other keys run along the columns.
+    grid_rows: usize,
 }
 
 impl SweepPlan {
@@ -263,7 +273,9 @@ fn spawn(case: &Case, plan: &SweepPlan) -> stark::Result<Child> {
             }
         }
     }
-    cmd.arg("--threads")
+    // Every step checked for intersections and inverted elements, independently of the solver.
+    cmd.arg("--check")
+        .arg("--threads")
         .arg(plan.threads.to_string())
         .arg("--quiet")
         .arg("--checkpoint-every")
@@ -309,6 +321,7 @@ fn collect(case: &Case, plan: &SweepPlan) -> stark::Result<CaseResult> {
         summary,
         outcome,
         lab_outcome,
+        checked_every_step: true,
     };
     std::fs::create_dir_all(&plan.results).map_err(|e| bad(format!("{}: {e}", plan.results.display())))?;
     // The run's pictures go with its result (small PNGs, meant to be committed).
@@ -325,9 +338,14 @@ fn collect(case: &Case, plan: &SweepPlan) -> stark::Result<CaseResult> {
     Ok(result)
 }
 
-/// Run a sweep file: every case not finished yet, `jobs` at a time; then the summary.
-pub fn sweep(file: &Path) -> stark::Result<bool> {
+/// Run a sweep file: every case not finished yet, `jobs` at a time; then the summary (only the
+/// summary with `summary_only`).
+pub fn sweep(file: &Path, summary_only: bool) -> stark::Result<bool> {
     let (cases, plan) = cases(file)?;
+    if summary_only {
+        write_summary(&cases, &plan)?;
+        return Ok(true);
+    }
     let todo: Vec<&Case> = cases.iter().filter(|c| !plan.result_path(c).exists()).collect();
     println!(
         "sweep                 {} cases, {} finished, {} to run ({} jobs × {} threads)",
@@ -418,23 +436,30 @@ fn write_summary(cases: &[Case], plan: &SweepPlan) -> stark::Result<()> {
         }
     }
     let mut md = String::from(
-        "| case | outcome | lab | simulated [s] | wall [s] | steps | Newton/step | failed attempts | largest residual [N] |\n\
-         |---|---|---|---|---|---|---|---|---|\n",
+        "| case | outcome | lab | original Stark | simulated [s] | wall [s] | steps | Newton/step | failed attempts | largest residual [N] | `--check` every step |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in &results {
         let s = &r.summary;
         let outcome = r.outcome.as_ref().and_then(|o| o["outcome"].as_str()).unwrap_or("–");
+        let paper = s["scene"]
+            .as_str()
+            .and_then(stark::scenes::kobuki_towel::Case::from_name)
+            .map(|c| String::from(c.paper_simulation_outcome()))
+            .unwrap_or_else(|| "–".into());
         md.push_str(&format!(
-            "| {} | {} | {} | {:.3} | {:.0} | {} | {:.2} | {} | {:.1e} |\n",
+            "| {} | {} | {} | {} | {:.3} | {:.0} | {} | {:.2} | {} | {:.1e} | {} |\n",
             r.case,
             outcome,
             r.lab_outcome.map(String::from).unwrap_or_else(|| "–".into()),
+            paper,
             s["simulated_time_s"].as_f64().unwrap_or(f64::NAN),
             s["wall_time_s"].as_f64().unwrap_or(f64::NAN),
             s["steps"].as_u64().unwrap_or(0),
             s["newton_iterations_per_step"].as_f64().unwrap_or(f64::NAN),
             s["failed_steps"].as_u64().unwrap_or(0),
             s["max_residual_n"].as_f64().unwrap_or(f64::NAN),
+            if r.checked_every_step { "yes" } else { "no" },
         ));
     }
     std::fs::create_dir_all(&plan.results).map_err(|e| bad(format!("{}: {e}", plan.results.display())))?;
@@ -443,6 +468,14 @@ fn write_summary(cases: &[Case], plan: &SweepPlan) -> stark::Result<()> {
     let json_path = plan.results.join("summary.json");
     let json = serde_json::to_string_pretty(&results).expect("serialisable");
     std::fs::write(&json_path, json + "\n").map_err(|e| bad(format!("{}: {e}", json_path.display())))?;
+    let grid_path = plan.results.join("summary.final.png");
+    if picture_grid(cases, plan, &results, &grid_path)? {
+        md.push_str(&format!(
+            "\n![final states]({})\n",
+            grid_path.file_name().map(|n| n.to_string_lossy()).unwrap_or_default()
+        ));
+        std::fs::write(&md_path, &md).map_err(|e| bad(format!("{}: {e}", md_path.display())))?;
+    }
     println!(
         "summary               {} of {} cases finished: {}",
         results.len(),
@@ -450,6 +483,78 @@ fn write_summary(cases: &[Case], plan: &SweepPlan) -> stark::Result<()> {
         md_path.display()
     );
     Ok(())
+}
+
+/// Width of one case's picture in the grid, px.
+const TILE_WIDTH_PX: u32 = 320;
+/// Height of the label band above each picture, px.
+const LABEL_HEIGHT_PX: u32 = 44;
+
+/// The finished cases' final-state pictures side by side, `plan.grid_rows` rows (the fastest-
+/// varying grid key) and the other keys along the columns, each labelled with its case and
+/// outcomes; a case not finished yet is an empty tile. Returns false when no case has a picture.
+fn picture_grid(cases: &[Case], plan: &SweepPlan, results: &[CaseResult], png: &Path) -> stark::Result<bool> {
+    use image::{imageops, Rgb, RgbImage};
+    use plotters::prelude::*;
+    let picture = |c: &Case| plan.results.join(format!("{}.final.png", c.name));
+    let pictures: Vec<Option<RgbImage>> = cases
+        .iter()
+        .map(|c| image::open(picture(c)).ok().map(|i| i.to_rgb8()))
+        .collect();
+    let Some(first) = pictures.iter().flatten().next() else {
+        return Ok(false);
+    };
+    let tile_h = (f64::from(first.height()) * f64::from(TILE_WIDTH_PX) / f64::from(first.width())).round() as u32;
+    let rows = plan.grid_rows.max(1);
+    let columns = cases.len().div_ceil(rows);
+    let (width, height) = (TILE_WIDTH_PX * columns as u32, (tile_h + LABEL_HEIGHT_PX) * rows as u32);
+    let mut canvas = RgbImage::from_pixel(width, height, Rgb([255, 255, 255]));
+    let at = |i: usize| {
+        let (row, column) = (i % rows, i / rows);
+        (TILE_WIDTH_PX * column as u32, (tile_h + LABEL_HEIGHT_PX) * row as u32)
+    };
+    for (i, p) in pictures.iter().enumerate() {
+        if let Some(p) = p {
+            let thumb = imageops::resize(p, TILE_WIDTH_PX, tile_h, imageops::FilterType::Triangle);
+            let (x, y) = at(i);
+            imageops::replace(&mut canvas, &thumb, i64::from(x), i64::from(y + LABEL_HEIGHT_PX));
+        }
+    }
+    crate::plot::register_font();
+    {
+        let buffer: &mut [u8] = &mut canvas;
+        let root = BitMapBackend::with_buffer(buffer, (width, height)).into_drawing_area();
+        let draw_err = |e: DrawingAreaErrorKind<_>| bad(format!("{}: {e}", png.display()));
+        for (i, case) in cases.iter().enumerate() {
+            let (x, y) = at(i);
+            let r = results.iter().find(|r| r.case == case.name);
+            let outcome = r
+                .and_then(|r| r.outcome.as_ref())
+                .and_then(|o| o["outcome"].as_str())
+                .map(|o| format!("outcome {o}"));
+            let lab = r.and_then(|r| r.lab_outcome).map(|l| format!("lab {l}"));
+            let second = match (r, outcome, lab) {
+                (None, ..) => "not finished".to_string(),
+                (Some(_), o, l) => [o, l].into_iter().flatten().collect::<Vec<_>>().join(", "),
+            };
+            let x = x as i32 + 6;
+            root.draw_text(
+                &case.name,
+                &("sans-serif", 15).into_font().color(&BLACK),
+                (x, y as i32 + 4),
+            )
+            .map_err(draw_err)?;
+            root.draw_text(
+                &second,
+                &("sans-serif", 15).into_font().color(&BLACK),
+                (x, y as i32 + 23),
+            )
+            .map_err(draw_err)?;
+        }
+        root.present().map_err(draw_err)?;
+    }
+    canvas.save(png).map_err(|e| bad(format!("{}: {e}", png.display())))?;
+    Ok(true)
 }
 
 #[cfg(test)]
@@ -504,5 +609,55 @@ configuration = [1, 2]
         assert!(e.contains("jobs"), "{e}");
         let e = err("scene = \"x\"\nout = \"a\"\nresults = \"b\"\ntypo = 1");
         assert!(e.contains("typo"), "{e}");
+    }
+
+    #[test]
+    fn the_summary_tiles_the_final_pictures_by_the_grid() {
+        let dir = tempfile::tempdir().unwrap();
+        let f = write(
+            dir.path(),
+            r#"
+scene = "kobuki_towel_{floor}_{configuration}"
+out = "runs"
+results = "results"
+[grid]
+floor = ["carpet", "polished"]
+configuration = [1, 2, 3]
+"#,
+        );
+        let (cases, plan) = cases(&f).unwrap();
+        std::fs::create_dir_all(&plan.results).unwrap();
+        // One finished case with a 100 × 150 picture; the others not finished.
+        let done = &cases[1];
+        image::RgbImage::from_pixel(100, 150, image::Rgb([200, 0, 0]))
+            .save(plan.results.join(format!("{}.final.png", done.name)))
+            .unwrap();
+        let result = CaseResult {
+            case: done.name.clone(),
+            summary: serde_json::json!({"scene": done.name, "simulated_time_s": 6.0}),
+            outcome: Some(serde_json::json!({"outcome": "O"})),
+            lab_outcome: Some('O'),
+            checked_every_step: true,
+        };
+        std::fs::write(plan.result_path(done), serde_json::to_string(&result).unwrap()).unwrap();
+        write_summary(&cases, &plan).unwrap();
+
+        let grid = image::open(plan.results.join("summary.final.png")).unwrap().to_rgb8();
+        // Floors along the rows, configurations along the columns.
+        let tile_h = 150 * TILE_WIDTH_PX / 100;
+        assert_eq!(grid.dimensions(), (3 * TILE_WIDTH_PX, 2 * (tile_h + LABEL_HEIGHT_PX)));
+        // cases[1] is polished_1: second row, first column.
+        assert_eq!(done.name, "kobuki_towel_polished_1");
+        let centre = |row: u32, column: u32| {
+            *grid.get_pixel(
+                column * TILE_WIDTH_PX + TILE_WIDTH_PX / 2,
+                row * (tile_h + LABEL_HEIGHT_PX) + LABEL_HEIGHT_PX + tile_h / 2,
+            )
+        };
+        assert_eq!(centre(1, 0), image::Rgb([200, 0, 0]));
+        assert_eq!(centre(0, 0), image::Rgb([255, 255, 255]));
+        let md = std::fs::read_to_string(plan.results.join("summary.md")).unwrap();
+        assert!(md.contains("| kobuki_towel_polished_1 | O | O | O |"), "{md}");
+        assert!(md.contains("summary.final.png"), "{md}");
     }
 }

@@ -156,7 +156,109 @@ impl EnergyTerm for RigidInertia {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::energy::testing::TestState;
+    use crate::state::angular_block;
     use nalgebra::UnitQuaternion;
+
+    /// Two tumbling bodies with damping, forces, torques and prescribed accelerations.
+    fn bodies() -> BodyArrays {
+        let mut b = BodyArrays::default();
+        for (k, q) in [(0.2, (0.2, 0.4, -0.3)), (-0.5, (1.1, -0.7, 2.0))] {
+            b.position.push(Vector3::new(k, 2.0 * k, -k));
+            b.orientation.push(UnitQuaternion::from_euler_angles(q.0, q.1, q.2));
+            b.velocity.push(Vector3::new(0.3, -k, 1.0));
+            b.angular_velocity.push(Vector3::new(1.0, 5.0 * k, 0.3));
+            b.mass.push(1.5 + k);
+            b.inertia_local
+                .push(Matrix3::from_diagonal(&Vector3::new(0.1, 0.2 - k / 10.0, 0.3)));
+            b.force.push(Vector3::new(k, 0.5, -2.0));
+            b.torque.push(Vector3::new(0.1, -0.2 * k, 0.05));
+            b.acceleration.push(Vector3::new(0.0, k, 0.3));
+            b.angular_acceleration.push(Vector3::new(-0.4, 0.2, k));
+        }
+        b
+    }
+
+    #[test]
+    fn gradient_and_hessian_match_finite_differences_of_the_energy() {
+        let dt = 0.01;
+        let body_v = [
+            (Vector3::new(0.2, -0.1, 0.7), Vector3::new(0.9, 1.2, -0.4)),
+            (Vector3::new(-0.3, 0.4, 0.1), Vector3::new(-2.0, 0.5, 1.5)),
+        ];
+        let state = |body_v: &[(Vector3<f64>, Vector3<f64>)]| {
+            TestState::new(vec![], vec![], vec![], vec![], dt).with_bodies(bodies(), body_v)
+        };
+        let st = state(&body_v);
+        let mut term = RigidInertia {
+            params: vec![
+                RigidBodyParams {
+                    linear_damping_1_s: 0.7,
+                    angular_damping_1_s: 1.3,
+                },
+                RigidBodyParams::default(),
+            ],
+            ..Default::default()
+        };
+        term.before_step(&st.eval());
+        // The state with DOF block `blk` (0: v, 1: ω) of body `b`, component `i`, moved by `h`.
+        let perturbed = |b: usize, blk: usize, i: usize, h: f64| {
+            let mut bv = body_v;
+            let moved = if blk == 0 { &mut bv[b].0 } else { &mut bv[b].1 };
+            moved[i] += h;
+            state(&bv)
+        };
+        let energy_at = |b, blk, i, h| term.energy(&perturbed(b, blk, i, h).eval());
+        let element_at = |b, blk, i, h| {
+            let mut out = vec![0.0; element_stride(2)];
+            term.evaluate_element(b, &perturbed(b, blk, i, h).eval(), EvalMode::ExactHessian, &mut out);
+            out
+        };
+        let h = 1e-6;
+        for b in 0..2 {
+            let mut out = vec![0.0; element_stride(2)];
+            term.evaluate_element(b, &st.eval(), EvalMode::ExactHessian, &mut out);
+            let others: f64 = (0..2)
+                .filter(|&o| o != b)
+                .map(|o| term.body_energy(o, &st.eval()).0)
+                .sum();
+            assert!((out[0] + others - term.energy(&st.eval())).abs() < 1e-12);
+            for blk in 0..2 {
+                for i in 0..3 {
+                    let fd = (energy_at(b, blk, i, h) - energy_at(b, blk, i, -h)) / (2.0 * h);
+                    let exact = out[1 + 3 * blk + i];
+                    assert!(
+                        (exact - fd).abs() < 1e-6 * (1.0 + exact.abs()),
+                        "body {b} block {blk} [{i}]: {exact} vs {fd}"
+                    );
+                    // Column (blk, i) of the Hessian: the gradient's central difference.
+                    let (gp, gm) = (element_at(b, blk, i, h), element_at(b, blk, i, -h));
+                    for row_blk in 0..2 {
+                        for r in 0..3 {
+                            let fd_h = (gp[1 + 3 * row_blk + r] - gm[1 + 3 * row_blk + r]) / (2.0 * h);
+                            let exact_h = out[7 + 9 * (row_blk * 2 + blk) + 3 * r + i];
+                            assert!(
+                                (exact_h - fd_h).abs() < 1e-6 * (1.0 + exact_h.abs()),
+                                "body {b} Hessian ({row_blk},{r}) ({blk},{i}): {exact_h} vs {fd_h}"
+                            );
+                        }
+                    }
+                }
+            }
+        }
+        // The DOF blocks the element writes are the body's.
+        let mut stencil = vec![0u32; 4];
+        term.write_stencils(&st.eval(), &mut stencil);
+        assert_eq!(
+            stencil,
+            [
+                linear_block(0, 0),
+                angular_block(0, 0),
+                linear_block(0, 1),
+                angular_block(0, 1)
+            ]
+        );
+    }
 
     #[test]
     fn lagged_target_conserves_momentum_with_predicted_inertia() {

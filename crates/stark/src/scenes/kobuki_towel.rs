@@ -125,10 +125,10 @@ impl Floor {
 pub enum ParamSet {
     /// The original's code (Table I's simulations): body 2.951 kg (3.551 kg in all), towel
     /// 0.5 kg/m², strain limit 110% (Green strain 1.1, effectively off), strain and bending
-    /// damping 0.2.
+    /// damping ratio 0.2.
     Original,
     /// The paper's text: 2.951 kg in all (body 2.351 kg), towel 0.484 kg, strain limit 10%,
-    /// damping 0.1.
+    /// damping ratio 0.1.
     Paper,
 }
 
@@ -178,6 +178,12 @@ impl Case {
     /// The lab's outcome of this case (Table I).
     pub fn lab_outcome(&self) -> char {
         let row = LAB_OUTCOMES[(self.floor == Floor::Polished) as usize];
+        row.as_bytes()[self.configuration - 1] as char
+    }
+
+    /// The original Stark's outcome of this case (Table I's simulation row).
+    pub fn paper_simulation_outcome(&self) -> char {
+        let row = PAPER_SIMULATION_OUTCOMES[(self.floor == Floor::Polished) as usize];
         row.as_bytes()[self.configuration - 1] as char
     }
 }
@@ -321,11 +327,71 @@ pub fn towel_meshes(configuration: usize) -> Result<(meshes::Mesh<3>, Vec<Vector
     Ok((rest, initial.vertices))
 }
 
+/// The towel's material in a parameter set: Neo-Hookean membrane E·h = 50 N/m (E = 1.5e4 Pa at
+/// h = 3.25 mm), ν 0.3, bending 5e-6, inertial damping 2, contact thickness d̂/2.
+///
+/// The damping is Rayleigh's, as the paper states it ("an inertial damping factor of 2 and a 0.1
+/// ratio relative to the stiffness for both the strain and bending damping"): a ratio β times
+/// the stiffness, strain `c = β·h·E` and bending `c = β·k` (the convention of the original's
+/// and this project's cloth preset). Read as absolute coefficients, 0.2 N·m·s of bending damping
+/// would be 4·10⁴ s times the bending stiffness: folds could not drape.
+pub fn towel_material(params: ParamSet) -> SurfaceMaterial {
+    let thickness = DHAT_M / 2.0;
+    let h = DHAT_M;
+    let e = 1.5e4;
+    let bending_stiffness = 5e-6;
+    let (density, damping_ratio, strain_limit) = match params {
+        ParamSet::Original => (0.5, 0.2, 1.1),
+        // 0.484 kg over the grid's 1.35 × 0.75 m.
+        ParamSet::Paper => (0.484 / (1.35 * 0.75), 0.1, 0.1),
+    };
+    SurfaceMaterial {
+        inertia: crate::deformables::InertiaParams {
+            density,
+            damping: 2.0,
+            quasistatic: false,
+        },
+        strain: crate::deformables::TriangleStrainParams {
+            thickness_m: h,
+            youngs_modulus: e,
+            poissons_ratio: 0.3,
+            damping: damping_ratio * h * e,
+            strain_limit,
+            ..Default::default()
+        },
+        bending: crate::presets::Bending::Flat(crate::deformables::FlatBendingParams {
+            stiffness: bending_stiffness,
+            damping: damping_ratio * bending_stiffness,
+        }),
+        contact_thickness_m: Some(thickness),
+    }
+}
+
 /// Build a run of the suite (see the module docs for the model).
 pub fn build(mut settings: Settings, case: Case) -> Result<(Simulation, RobotTowel)> {
-    let (rest, initial) = towel_meshes(case.configuration)?;
-    let thickness = DHAT_M / 2.0;
+    let (_, initial) = towel_meshes(case.configuration)?;
     settings.name = case.name();
+    build_with_towel(settings, case, &initial)
+}
+
+/// [`build`] with the towel's initial positions given (a new configuration, one position per
+/// vertex of the flat grid, in its order, the towel's far side along +y as in the paper's files);
+/// `case.configuration` is then only a label and `settings.name` is kept.
+pub fn build_with_towel(
+    mut settings: Settings,
+    case: Case,
+    towel_positions_m: &[Vector3<f64>],
+) -> Result<(Simulation, RobotTowel)> {
+    let rest = parse(TOWEL_FLAT_OBJ, "towel_flat.obj")?;
+    if towel_positions_m.len() != rest.vertices.len() {
+        return Err(StarkError::InvalidInput(format!(
+            "a towel configuration has one position per vertex of the flat grid ({}), not {}",
+            rest.vertices.len(),
+            towel_positions_m.len()
+        )));
+    }
+    let initial = towel_positions_m;
+    let thickness = DHAT_M / 2.0;
     settings.time_step_s = 0.005;
     settings.newton.residual_tolerance_n = 1e-6;
     settings.contact.default_thickness_m = Some(thickness);
@@ -339,33 +405,7 @@ pub fn build(mut settings: Settings, case: Case) -> Result<(Simulation, RobotTow
     let z_min = start.iter().map(|p| p.z).fold(f64::INFINITY, f64::min);
     let floor_top = z_min - DHAT_M;
 
-    let h = DHAT_M;
-    let e = 1.5e4;
-    let (density, damping, strain_limit) = match case.params {
-        ParamSet::Original => (0.5, 0.2, 1.1),
-        // 0.484 kg over the grid's 1.35 × 0.75 m.
-        ParamSet::Paper => (0.484 / (1.35 * 0.75), 0.1, 0.1),
-    };
-    let towel_material = SurfaceMaterial {
-        inertia: crate::deformables::InertiaParams {
-            density,
-            damping: 2.0,
-            quasistatic: false,
-        },
-        strain: crate::deformables::TriangleStrainParams {
-            thickness_m: h,
-            youngs_modulus: e,
-            poissons_ratio: 0.3,
-            damping,
-            strain_limit,
-            ..Default::default()
-        },
-        bending: crate::presets::Bending::Flat(crate::deformables::FlatBendingParams {
-            stiffness: 5e-6,
-            damping,
-        }),
-        contact_thickness_m: Some(thickness),
-    };
+    let towel_material = towel_material(case.params);
     let mut sim = Simulation::new(settings)?;
     let towel = sim.add_surface("towel", &rest.vertices, &rest.elements, &towel_material)?;
     for (x, p) in sim.nodes.x[towel.nodes.range()].iter_mut().zip(&start) {
@@ -544,6 +584,36 @@ mod tests {
                 assert_eq!(towel.len(), 5757);
             }
         }
+    }
+
+    #[test]
+    fn a_new_towel_configuration_takes_one_position_per_vertex() {
+        let case = Case {
+            floor: Floor::Carpet,
+            configuration: 1,
+            params: ParamSet::Original,
+        };
+        let (_, lifted) = towel_meshes(2).unwrap();
+        let lifted: Vec<_> = lifted.iter().map(|p| p + Vector3::new(0.0, 0.0, 0.1)).collect();
+        let mut settings = quiet();
+        settings.name = "my_towel".into();
+        let (sim, run) = build_with_towel(settings, case, &lifted).unwrap();
+        assert_eq!(sim.settings.name, "my_towel");
+        // The floor follows the towel: the same layout as the file's configuration.
+        let (builtin, builtin_run) = build(
+            quiet(),
+            Case {
+                configuration: 2,
+                ..case
+            },
+        )
+        .unwrap();
+        let ours = sim.positions(run.towel);
+        for (a, b) in ours.iter().zip(builtin.positions(builtin_run.towel)) {
+            assert!((a - b - Vector3::new(0.0, 0.0, 0.1)).norm() < 1e-12);
+        }
+        let e = build_with_towel(quiet(), case, &lifted[1..]).err().unwrap().to_string();
+        assert!(e.contains("one position per vertex") && e.contains("5756"), "{e}");
     }
 
     #[test]

@@ -198,6 +198,12 @@ fn axpy_velocities(dofs: &DofMap, base: &[Vector3<f64>], step: &[f64], alpha: f6
     }
 }
 
+/// Relative tolerance of CG preconditioned by the step's factorisation (tightening as
+/// `min(this, r/r₀)`: the Newton iterations keep converging as with exact directions).
+const REUSE_RELATIVE_TOLERANCE: f64 = 1e-3;
+/// CG iterations preconditioned by the step's factorisation before it is refreshed.
+const REUSE_MAX_CG: usize = 25;
+
 /// Solve one step: on success `v` holds the end-of-step velocities.
 pub fn solve(
     ws: &mut NewtonWorkspace,
@@ -266,6 +272,8 @@ pub fn solve(
     }
     let mut first_residual: Option<f64> = None;
     let mut rebalanced = false;
+    // A Cholesky factorisation of this step's Hessian exists (see the linear solve).
+    let mut factored_this_step = false;
     // The assembly of the current iterate, when the line search already made it (a step
     // accepted by its residual, below).
     let mut assembled: Option<Assembled> = None;
@@ -341,11 +349,32 @@ pub fn solve(
             let mut solved = false;
             let mut indefinite = false;
             if settings.linear_solver == LinearSolver::Cholesky {
-                solved = ws
-                    .cholesky
-                    .solve(matrix, ws.assembler.pattern_id, &ws.rhs, &mut ws.step)
-                    .is_ok();
-                indefinite = !solved;
+                // After the step's first iteration, the step's factorisation preconditions CG: a
+                // few triangular solves instead of a factorisation, while the Hessian stays near
+                // the factorised one (a fresh factor when CG needs more; every step starts with a
+                // fresh one, so a run resumed at a step is the same run).
+                if iteration > 0 && factored_this_step {
+                    let g_norm = dot(&ws.gradient, &ws.gradient).sqrt();
+                    let eta = REUSE_RELATIVE_TOLERANCE.min(residual / r0);
+                    let tol = (eta * g_norm).max(0.1 * settings.residual_tolerance_n * dt);
+                    let cholesky = &mut ws.cholesky;
+                    let info =
+                        pcg::solve_preconditioned(matrix, &ws.rhs, &mut ws.step, tol, REUSE_MAX_CG, &mut |r, z| {
+                            if !cholesky.apply_last_factor(r, z) {
+                                z.copy_from_slice(r);
+                            }
+                        });
+                    report.cg_iterations += info.iterations;
+                    solved = info.converged && !info.indefinite;
+                }
+                if !solved {
+                    solved = ws
+                        .cholesky
+                        .solve(matrix, ws.assembler.pattern_id, &ws.rhs, &mut ws.step)
+                        .is_ok();
+                    indefinite = !solved;
+                    factored_this_step = solved;
+                }
             }
             // A failed factorisation of an unprojected Hessian means "project"; otherwise use CG.
             if !solved && (!indefinite || project) {

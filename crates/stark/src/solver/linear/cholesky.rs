@@ -4,7 +4,7 @@
 
 use super::block_sparse::BlockSparseMatrix;
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
-use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, SymbolicCholesky};
+use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, LltRef, SymbolicCholesky};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::{Conj, MatMut, Par, Side};
 
@@ -29,6 +29,8 @@ pub struct CholeskySolver {
     workspace: Option<(MemBuffer, Par)>,
     /// Number of symbolic analyses performed (for logs and tests).
     pub analyses: usize,
+    /// `factor` holds a complete factorisation of the current analysis.
+    factored: bool,
 }
 
 /// Why a factorisation failed.
@@ -88,6 +90,26 @@ impl CholeskySolver {
         })
     }
 
+    /// The last factorisation's `(L Lᵀ)⁻¹ r` into `z`, for a matrix near the one factorised (a
+    /// preconditioner for the next Newton iterations). False when there is no factor of this size.
+    pub fn apply_last_factor(&mut self, r: &[f64], z: &mut [f64]) -> bool {
+        let (Some(an), Some((buffer, par))) = (self.analysis.as_ref(), self.workspace.as_mut()) else {
+            return false;
+        };
+        if self.factor.len() != an.symbolic_llt.len_val() || an.symbolic_llt.nrows() != r.len() || !self.factored {
+            return false;
+        }
+        z.copy_from_slice(r);
+        let n = z.len();
+        LltRef::new(&an.symbolic_llt, &self.factor).solve_in_place_with_conj(
+            Conj::No,
+            MatMut::from_column_major_slice_mut(z, n, 1),
+            *par,
+            MemStack::new(buffer),
+        );
+        true
+    }
+
     /// Solve `A x = b`. `pattern_id` identifies the sparsity pattern of `a`: the analysis is
     /// redone only when it changes.
     pub fn solve(
@@ -102,6 +124,7 @@ impl CholeskySolver {
             1 => Par::Seq,
             n => Par::rayon(n),
         };
+        self.factored = false;
         if self.analysis.as_ref().map(|an| an.pattern_id) != Some(pattern_id) {
             self.analysis = Some(Self::analyse(a, pattern_id)?);
             self.analyses += 1;
@@ -135,6 +158,7 @@ impl CholeskySolver {
                 Default::default(),
             )
             .map_err(|e| CholeskyError::NotPositiveDefinite(format!("{e:?}")))?;
+        self.factored = true;
         x.copy_from_slice(b);
         let n = x.len();
         llt.solve_in_place_with_conj(

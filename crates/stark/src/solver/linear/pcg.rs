@@ -54,15 +54,31 @@ fn apply_preconditioner(inv_diag: &[[f64; 9]], r: &[f64], z: &mut [f64]) {
         });
 }
 
-/// Solve `A x = b` to `‖b − A x‖₂ ≤ tolerance`, starting from `x = 0`.
+/// Solve `A x = b` to `‖b − A x‖₂ ≤ tolerance`, starting from `x = 0`, block-Jacobi
+/// preconditioned.
 pub fn solve(a: &BlockSparseMatrix, b: &[f64], x: &mut [f64], tolerance: f64, max_iterations: usize) -> CgInfo {
-    let n = b.len();
     let inv_diag = block_jacobi(a);
+    solve_preconditioned(a, b, x, tolerance, max_iterations, &mut |r, z| {
+        apply_preconditioner(&inv_diag, r, z)
+    })
+}
+
+/// [`solve`] with the preconditioner `precondition(r, z)`: `z ≈ A⁻¹ r` (symmetric positive
+/// definite).
+pub fn solve_preconditioned(
+    a: &BlockSparseMatrix,
+    b: &[f64],
+    x: &mut [f64],
+    tolerance: f64,
+    max_iterations: usize,
+    precondition: &mut dyn FnMut(&[f64], &mut [f64]),
+) -> CgInfo {
+    let n = b.len();
     x.iter_mut().for_each(|v| *v = 0.0);
     let mut r = b.to_vec();
     let mut z = vec![0.0; n];
     let mut ap = vec![0.0; n];
-    apply_preconditioner(&inv_diag, &r, &mut z);
+    precondition(&r, &mut z);
     let mut p = z.clone();
     let mut rz = dot(&r, &z);
     let mut info = CgInfo {
@@ -89,7 +105,7 @@ pub fn solve(a: &BlockSparseMatrix, b: &[f64], x: &mut [f64], tolerance: f64, ma
             info.converged = true;
             break;
         }
-        apply_preconditioner(&inv_diag, &r, &mut z);
+        precondition(&r, &mut z);
         let rz_new = dot(&r, &z);
         let beta = rz_new / rz;
         rz = rz_new;
