@@ -294,6 +294,14 @@ impl Simulation {
         report_out(py, &s)
     }
 
+    /// An independent check of the current state, as `stark run --check` makes after every step:
+    /// a dict with `intersections` (every contact edge crossing a contact triangle, described)
+    /// and `inverted_tets` (their count).
+    fn state_check<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let c = self.get(|s| s.state_check())?;
+        report_out(py, &c)
+    }
+
     // -----------------------------------------------------------------------------------------
     // Time stepping
     // -----------------------------------------------------------------------------------------

@@ -177,3 +177,17 @@ def test_gravity_and_time_properties(hanging_cloth):
     sim.step()
     np.testing.assert_allclose(sim.velocities(cloth), 0.0, atol=1e-9)
     assert "Simulation('simulation'" in repr(sim)
+
+
+def test_state_check_finds_crossing_sheets(settings):
+    settings.contact.default_thickness_m = 1e-3
+    sim = starkrs.Simulation(settings)
+    v, t = meshes.triangle_grid([0.5, 0.5], [4, 4])
+    sim.add_surface("flat", v, t, starkrs.SurfaceMaterial.cotton_fabric())
+    assert sim.state_check() == {"intersections": [], "inverted_tets": 0}
+    # The same sheet turned upright (y ↔ z) through the first one.
+    upright = np.asarray(v)[:, [0, 2, 1]]
+    sim.add_surface("upright", upright, t, starkrs.SurfaceMaterial.cotton_fabric())
+    c = sim.state_check()
+    assert len(c["intersections"]) > 0 and c["inverted_tets"] == 0
+    assert "'flat'" in c["intersections"][0] and "'upright'" in c["intersections"][0], c["intersections"][0]

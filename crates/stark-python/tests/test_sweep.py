@@ -52,6 +52,7 @@ def test_two_cases_on_ray_then_nothing_left(tmp_path):
         ]
         for r in results:
             assert abs(r["summary"]["simulated_time_s"] - 0.1) < 1e-9
+            assert r["checked_every_step"]
         # Each ran with its own time step (chunks of 0.05 s end on a shortened step).
         steps = [r["summary"]["steps"] for r in results]
         assert 5 <= steps[0] < steps[1], steps

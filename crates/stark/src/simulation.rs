@@ -125,7 +125,7 @@ pub struct RunSummary {
 }
 
 /// Result of [`Simulation::state_check`].
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq, Eq, serde::Serialize)]
 pub struct StateCheck {
     /// The intersecting edge–triangle pairs, described.
     pub intersections: Vec<String>,

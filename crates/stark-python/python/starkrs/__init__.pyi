@@ -808,6 +808,10 @@ class Simulation:
         """Current barrier stiffness κ, N/m (0 before the first step)."""
     def summary(self) -> _Report:
         """Totals so far (steps, Newton iterations, residuals, wall time, frames ...) as a dict."""
+    def state_check(self) -> dict[str, Any]:
+        """An independent check of the current state, as `stark run --check` makes after every step:
+        a dict with `intersections` (every contact edge crossing a contact triangle, described)
+        and `inverted_tets` (their count)."""
 
     # Time stepping
     def step(self) -> _Report:

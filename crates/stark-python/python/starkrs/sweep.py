@@ -107,13 +107,25 @@ def run_case(case: dict[str, Any], settings: dict[str, Any]) -> dict[str, Any]:
         sim.restore_checkpoint(str(checkpoint))
     end = settings["duration_s"] if settings["duration_s"] is not None else scene.duration_s
     chunk = settings["checkpoint_every_s"]
+
+    def check(sim: Any) -> None:
+        # As `stark sweep` runs its cases with `--check`: every state (before each step and at the
+        # end), independently of the solver; an intersection fails the case.
+        c = sim.state_check()
+        if c["intersections"] or c["inverted_tets"]:
+            raise RuntimeError(
+                f"case {case['name']}: at t = {sim.time:.6f} s {len(c['intersections'])} intersection(s) "
+                f"({'; '.join(c['intersections'][:3])}) and {c['inverted_tets']} inverted tet(s)"
+            )
+
     summary = None
     while sim.time < end - 1e-9:
-        summary = sim.run(min(chunk, end - sim.time))
+        summary = sim.run(min(chunk, end - sim.time), callback=check)
         sim.save_checkpoint(str(checkpoint))
+    check(sim)
     if summary is None:
         summary = sim.summary()
-    result: dict[str, Any] = {"case": case["name"], "summary": summary}
+    result: dict[str, Any] = {"case": case["name"], "summary": summary, "checked_every_step": True}
     probe = run_dir / f"{scene.name}.robot_towel.jsonl"
     if probe.exists():
         result["outcome"] = starkrs.classify_robot_towel(str(probe))
