@@ -9,8 +9,10 @@ use std::path::PathBuf;
 pub enum LinearSolver {
     /// Block-Jacobi preconditioned conjugate gradients (scales to large systems).
     Pcg,
-    /// Sparse Cholesky with the symbolic analysis reused while the pattern is unchanged (exact;
-    /// pays below about 25k DOFs on 2 cores).
+    /// Sparse Cholesky (pays below about 25k DOFs on 2 cores): one factorisation at each step's
+    /// first Newton iteration (the symbolic analysis reused while the pattern is unchanged); the
+    /// step's later iterations solve by CG preconditioned with it, refactorising when CG needs
+    /// more than 25 iterations.
     Cholesky,
 }
 
