@@ -463,19 +463,15 @@ fn write_summary(cases: &[Case], plan: &SweepPlan) -> stark::Result<()> {
         ));
     }
     std::fs::create_dir_all(&plan.results).map_err(|e| bad(format!("{}: {e}", plan.results.display())))?;
+    let grid_name = "summary.final.png";
+    if picture_grid(cases, plan, &results, &plan.results.join(grid_name))? {
+        md.push_str(&format!("\n![final states]({grid_name})\n"));
+    }
     let md_path = plan.results.join("summary.md");
     std::fs::write(&md_path, &md).map_err(|e| bad(format!("{}: {e}", md_path.display())))?;
     let json_path = plan.results.join("summary.json");
     let json = serde_json::to_string_pretty(&results).expect("serialisable");
     std::fs::write(&json_path, json + "\n").map_err(|e| bad(format!("{}: {e}", json_path.display())))?;
-    let grid_path = plan.results.join("summary.final.png");
-    if picture_grid(cases, plan, &results, &grid_path)? {
-        md.push_str(&format!(
-            "\n![final states]({})\n",
-            grid_path.file_name().map(|n| n.to_string_lossy()).unwrap_or_default()
-        ));
-        std::fs::write(&md_path, &md).map_err(|e| bad(format!("{}: {e}", md_path.display())))?;
-    }
     println!(
         "summary               {} of {} cases finished: {}",
         results.len(),
@@ -567,21 +563,22 @@ mod tests {
         p
     }
 
+    /// A sweep over the robot–towel cases: both floors, `configurations` (a TOML array), and
+    /// `extra` grid lines.
+    fn towel_sweep(dir: &Path, configurations: &str, extra: &str) -> PathBuf {
+        write(
+            dir,
+            &format!(
+                "scene = \"kobuki_towel_{{floor}}_{{configuration}}\"\nout = \"runs\"\nresults = \"results\"\n\
+                 [grid]\nfloor = [\"carpet\", \"polished\"]\nconfiguration = {configurations}\n{extra}\n"
+            ),
+        )
+    }
+
     #[test]
     fn the_grid_fills_the_scene_name_and_sets_overrides() {
         let dir = tempfile::tempdir().unwrap();
-        let f = write(
-            dir.path(),
-            r#"
-scene = "kobuki_towel_{floor}_{configuration}"
-out = "runs"
-results = "results"
-[grid]
-floor = ["carpet", "polished"]
-configuration = [1, 2]
-"settings.time_step_s" = [0.01]
-"#,
-        );
+        let f = towel_sweep(dir.path(), "[1, 2]", "\"settings.time_step_s\" = [0.01]");
         let (cases, plan) = cases(&f).unwrap();
         let names: Vec<_> = cases.iter().map(|c| c.name.as_str()).collect();
         assert_eq!(
@@ -614,17 +611,7 @@ configuration = [1, 2]
     #[test]
     fn the_summary_tiles_the_final_pictures_by_the_grid() {
         let dir = tempfile::tempdir().unwrap();
-        let f = write(
-            dir.path(),
-            r#"
-scene = "kobuki_towel_{floor}_{configuration}"
-out = "runs"
-results = "results"
-[grid]
-floor = ["carpet", "polished"]
-configuration = [1, 2, 3]
-"#,
-        );
+        let f = towel_sweep(dir.path(), "[1, 2, 3]", "");
         let (cases, plan) = cases(&f).unwrap();
         std::fs::create_dir_all(&plan.results).unwrap();
         // One finished case with a 100 × 150 picture; the others not finished.

@@ -102,6 +102,8 @@ pub struct Assembler {
     pub pattern_id: u64,
     /// Number of layout rebuilds (for logs).
     pub rebuilds: usize,
+    /// The next assembly builds the pattern from the terms alone (set at each step's start).
+    pub exact_pattern_next: bool,
     /// Wall time in evaluation (with accumulation) and in completing the matrix, s.
     pub timing: (f64, f64),
 }
@@ -204,7 +206,13 @@ impl Assembler {
         // The pattern only grows while the terms' blocks fit in it: a contact pair that comes
         // and goes between Newton iterations keeps its blocks (as zeros), so the pattern, the
         // other terms' slots and the linear solver's analysis stay.
-        let fits = self.matrix.n_blocks == n_blocks
+        // At a step's first assembly the pattern is rebuilt from the terms alone (unless it is
+        // exactly theirs already): what the sticky pattern carries over from earlier steps would
+        // otherwise change the Cholesky ordering, and a run resumed from a checkpoint would
+        // round differently from the uninterrupted one.
+        let exact = std::mem::take(&mut self.exact_pattern_next);
+        let fits = !exact
+            && self.matrix.n_blocks == n_blocks
             && !self.matrix.row_start.is_empty()
             && self
                 .layouts
@@ -212,7 +220,7 @@ impl Assembler {
                 .zip(&changed)
                 .filter(|(_, &c)| c)
                 .all(|(layout, _)| layout.pairs.iter().all(|&(r, c)| self.matrix.find(r, c).is_some()));
-        let same_pattern = fits;
+        let mut same_pattern = fits;
         if !fits {
             // Merge the sorted pair lists of all terms and the diagonal; keep the old pattern's
             // blocks too while they are few (the pairs that come and go), not when the contacts
@@ -221,17 +229,21 @@ impl Assembler {
             for layout in &self.layouts {
                 pairs = merge_sorted(&pairs, &layout.pairs);
             }
-            if self.matrix.n_blocks == n_blocks
-                && (self.matrix.nnz_blocks() as f64) < STICKY_PATTERN_GROWTH * pairs.len() as f64
-            {
-                pairs = merge_sorted(&pairs, &self.matrix.pattern_pairs());
+            let old_pairs = (self.matrix.n_blocks == n_blocks).then(|| self.matrix.pattern_pairs());
+            same_pattern = exact && old_pairs.as_ref() == Some(&pairs);
+            if !exact && (self.matrix.nnz_blocks() as f64) < STICKY_PATTERN_GROWTH * pairs.len() as f64 {
+                if let Some(old) = &old_pairs {
+                    pairs = merge_sorted(&pairs, old);
+                }
             }
-            self.matrix = BlockSparseMatrix::from_sorted_pairs(n_blocks, &pairs);
-            self.mirror = pairs
-                .iter()
-                .map(|&(r, c)| (r > c).then(|| slot_of(&self.matrix, c, r)))
-                .collect();
-            self.pattern_id = NEXT_PATTERN_ID.fetch_add(1, Ordering::Relaxed);
+            if !same_pattern {
+                self.matrix = BlockSparseMatrix::from_sorted_pairs(n_blocks, &pairs);
+                self.mirror = pairs
+                    .iter()
+                    .map(|&(r, c)| (r > c).then(|| slot_of(&self.matrix, c, r)))
+                    .collect();
+                self.pattern_id = NEXT_PATTERN_ID.fetch_add(1, Ordering::Relaxed);
+            }
         }
         let matrix = &self.matrix;
 

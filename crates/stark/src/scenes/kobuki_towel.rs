@@ -177,13 +177,17 @@ impl Case {
 
     /// The lab's outcome of this case (Table I).
     pub fn lab_outcome(&self) -> char {
-        let row = LAB_OUTCOMES[(self.floor == Floor::Polished) as usize];
-        row.as_bytes()[self.configuration - 1] as char
+        self.table_one(&LAB_OUTCOMES)
     }
 
     /// The original Stark's outcome of this case (Table I's simulation row).
     pub fn paper_simulation_outcome(&self) -> char {
-        let row = PAPER_SIMULATION_OUTCOMES[(self.floor == Floor::Polished) as usize];
+        self.table_one(&PAPER_SIMULATION_OUTCOMES)
+    }
+
+    /// This case's entry in a pair of Table I rows (carpet, polished).
+    fn table_one(&self, rows: &[&str; 2]) -> char {
+        let row = rows[(self.floor == Floor::Polished) as usize];
         row.as_bytes()[self.configuration - 1] as char
     }
 }

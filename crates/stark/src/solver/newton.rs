@@ -274,6 +274,8 @@ pub fn solve(
     let mut rebalanced = false;
     // A Cholesky factorisation of this step's Hessian exists (see the linear solve).
     let mut factored_this_step = false;
+    // The step's Hessian pattern, and so the Cholesky ordering, depends on this step alone.
+    ws.assembler.exact_pattern_next = true;
     // The assembly of the current iterate, when the line search already made it (a step
     // accepted by its residual, below).
     let mut assembled: Option<Assembled> = None;

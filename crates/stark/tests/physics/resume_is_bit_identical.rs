@@ -1,7 +1,7 @@
 //! A run continued from a checkpoint repeats the uninterrupted run bit for bit (DESIGN §7):
 //! a 2 s run against 1 s + `save_checkpoint` + a rebuilt scene + `restore_checkpoint` + 1 s,
 //! comparing every DOF (node positions and velocities, body poses and velocities), the time, dt,
-//! the counters and the body/joint logs. Three scenes, from the scene files in `scenes/`:
+//! the counters and the body/joint logs. Scenes from the scene files in `scenes/`:
 //!
 //! - `rb_box_on_cloth.toml` (cloth 10×10 through `--set`-style overrides): rigid–deformable
 //!   contact with friction μ = 0.5, adaptive barrier stiffness, and a keyframed paddle (time
@@ -9,7 +9,9 @@
 //! - `rb_pendulum_chain.toml`: five hinged links and a motor-driven wheel; two hinges made soft
 //!   (1e4 N/m) with a 0.1 mm tolerance harden during the run (the test checks that they do), so
 //!   the hardened stiffnesses must come back;
-//! - `twisting_cloth_no_contact.toml` (8×8 cloth): prescribed edges turned by time events.
+//! - `twisting_cloth_no_contact.toml` (8×8 cloth): prescribed edges turned by time events;
+//! - `rb_box_on_cloth.toml` again with the sparse Cholesky solver, whose factorisation each step
+//!   reuses as a preconditioner.
 //!
 //! Then the errors: a checkpoint restored into another scene, a truncated file and another
 //! format version are refused with messages saying so.
@@ -134,6 +136,24 @@ fn check_resume(scene: &str, overrides: &[&str]) -> (Simulation, u64) {
 fn contact_with_friction_and_keyframes_resumes_bit_identically() {
     let (whole, _) = check_resume("rb_box_on_cloth.toml", &["surface.cloth.grid.quads=[10, 10]"]);
     assert!(whole.summary().max_active_pairs > 0, "the box must touch the cloth");
+}
+
+/// The sparse Cholesky solver reuses each step's factorisation as CG's preconditioner for the
+/// step's later Newton iterations: every step starts from a fresh factor, so a resumed run is
+/// the same run.
+#[test]
+fn cholesky_with_factor_reuse_resumes_bit_identically() {
+    let (whole, _) = check_resume(
+        "rb_box_on_cloth.toml",
+        &[
+            "surface.cloth.grid.quads=[10, 10]",
+            "settings.newton.linear_solver=\"cholesky\"",
+        ],
+    );
+    let s = whole.summary();
+    assert!(s.max_active_pairs > 0, "the box must touch the cloth");
+    // The reuse path ran: CG iterations preconditioned by the step's factor.
+    assert!(s.cg_iterations > 0 && s.newton_iterations > s.steps, "{s:?}");
 }
 
 #[test]

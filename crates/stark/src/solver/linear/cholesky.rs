@@ -96,7 +96,7 @@ impl CholeskySolver {
         let (Some(an), Some((buffer, par))) = (self.analysis.as_ref(), self.workspace.as_mut()) else {
             return false;
         };
-        if self.factor.len() != an.symbolic_llt.len_val() || an.symbolic_llt.nrows() != r.len() || !self.factored {
+        if !self.factored || an.symbolic_llt.nrows() != r.len() {
             return false;
         }
         z.copy_from_slice(r);
