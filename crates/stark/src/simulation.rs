@@ -24,6 +24,21 @@ struct TimeEvent {
     action: EventAction,
 }
 
+/// What a spawn does once: add objects (rigid bodies, deformables) and their interactions.
+type SpawnAction = Box<dyn FnOnce(&mut Simulation) -> Result<()> + Send>;
+
+/// Objects added when the simulated time reaches `time_s` ([`Simulation::add_spawn`]).
+struct Spawn {
+    time_s: f64,
+    label: String,
+    /// `None` once fired.
+    action: Option<SpawnAction>,
+}
+
+/// A spawn is due when the simulated time is within this of its time (repeated additions of dt
+/// round), s.
+const SPAWN_TIME_TOLERANCE_S: f64 = 1e-9;
+
 /// Handle to a user energy of a simulation.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, serde::Deserialize)]
 pub struct UserEnergyHandle(pub u32);
@@ -154,6 +169,8 @@ pub struct Simulation {
     time: f64,
     dt: f64,
     events: Vec<TimeEvent>,
+    /// In the order added; each fires once.
+    spawns: Vec<Spawn>,
     pub(crate) newton: NewtonWorkspace,
     velocities: Vec<Vector3<f64>>,
     scratch_x: Vec<Vector3<f64>>,
@@ -201,6 +218,7 @@ impl Simulation {
             time: 0.0,
             dt,
             events: Vec::new(),
+            spawns: Vec::new(),
             newton: NewtonWorkspace::default(),
             velocities: Vec::new(),
             scratch_x: Vec::new(),
@@ -379,6 +397,81 @@ impl Simulation {
         });
     }
 
+    /// Add objects during the run: `action(sim)` runs once, when the simulated time first
+    /// reaches `time_s` (before the first step when `time_s <= 0`, else right after the step
+    /// that reaches it, so they are in that step's frame and logs). Use it to pour balls into a
+    /// cup or drop parts on a conveyor: the action adds rigid bodies, deformables, contact
+    /// settings and friction as when building a scene, and sets their initial state.
+    ///
+    /// What it adds must not intersect anything (checked; the run stops with an error naming
+    /// the spawn). Checkpoints taken after a spawn restore into a simulation built from the same
+    /// scene with the same spawns added: [`Simulation::restore_checkpoint`] fires the spawns due
+    /// by the checkpoint's time first, so the action must add the same objects whatever the
+    /// state (their state is then restored).
+    pub fn add_spawn(
+        &mut self,
+        time_s: f64,
+        label: &str,
+        action: impl FnOnce(&mut Simulation) -> Result<()> + Send + 'static,
+    ) -> Result<()> {
+        if !time_s.is_finite() {
+            return Err(StarkError::InvalidInput(format!(
+                "spawn '{label}': time_s = {time_s} must be finite"
+            )));
+        }
+        if self.started && time_s < self.time - SPAWN_TIME_TOLERANCE_S {
+            return Err(StarkError::InvalidInput(format!(
+                "spawn '{label}' at t = {time_s} s is in the past (the simulation is at t = {} s)",
+                self.time
+            )));
+        }
+        self.spawns.push(Spawn {
+            time_s,
+            label: label.to_string(),
+            action: Some(Box::new(action)),
+        });
+        Ok(())
+    }
+
+    /// Spawns added with [`Simulation::add_spawn`]: `(time_s, label, fired)`.
+    pub fn spawns(&self) -> Vec<(f64, &str, bool)> {
+        self.spawns
+            .iter()
+            .map(|s| (s.time_s, s.label.as_str(), s.action.is_none()))
+            .collect()
+    }
+
+    /// Fire every spawn due by time `t` in the order added. `check` tests the new objects for
+    /// intersections (off when replaying spawns into a simulation about to be restored).
+    fn fire_spawns(&mut self, t: f64, check: bool) -> Result<()> {
+        for k in 0..self.spawns.len() {
+            let due = self.spawns[k].action.is_some() && t >= self.spawns[k].time_s - SPAWN_TIME_TOLERANCE_S;
+            if !due {
+                continue;
+            }
+            let action = self.spawns[k].action.take().expect("due spawns have their action");
+            let (time_s, label) = (self.spawns[k].time_s, self.spawns[k].label.clone());
+            let meshes_before = self.output.meshes.len();
+            action(self).map_err(|e| StarkError::InvalidInput(format!("spawn '{label}' at t = {time_s} s: {e}")))?;
+            // The frames list its meshes from the spawn's time on.
+            for m in &mut self.output.meshes[meshes_before..] {
+                m.first_time_s = time_s;
+            }
+            if check {
+                let crossings = self.contact.find_intersections(&self.nodes.x);
+                if !crossings.is_empty() {
+                    return Err(StarkError::InvalidInput(format!(
+                        "spawn '{label}' at t = {time_s} s: the objects it added intersect others ({} edge–triangle \
+                         pairs), e.g. {}",
+                        crossings.len(),
+                        crossings[0]
+                    )));
+                }
+            }
+        }
+        Ok(())
+    }
+
     fn terms_mut(&mut self) -> Vec<&mut dyn EnergyTerm> {
         let mut terms = self.deformables.terms_mut();
         terms.extend(self.rigid_bodies.terms_mut());
@@ -409,6 +502,8 @@ impl Simulation {
         if self.started {
             return Ok(());
         }
+        // Spawns due at the start (a resumed run replayed its spawns when restoring).
+        self.fire_spawns(self.time, false)?;
         let crossings = self.contact.find_intersections(&self.nodes.x);
         if !crossings.is_empty() {
             let shown: Vec<_> = crossings.iter().take(5).cloned().collect();
@@ -606,6 +701,7 @@ impl Simulation {
                         self.bodies = bodies;
                     }
                     self.velocities = velocities;
+                    self.fire_spawns(self.time, true)?;
                     // A shortened last step leaves dt as it was (the run may continue).
                     if self.settings.adaptive_time_step && !shortened {
                         self.dt = (dt * self.settings.time_step_growth).min(self.settings.time_step_s);
@@ -840,6 +936,13 @@ impl Simulation {
             h.str(&o.label);
         }
         h.u64(self.events.len() as u64);
+        if !self.spawns.is_empty() {
+            h.str("spawns");
+            for s in &self.spawns {
+                h.f64(s.time_s);
+                h.str(&s.label);
+            }
+        }
         for t in self.terms_mut() {
             h.str(t.name());
             // Contact's elements are its active pairs, which change from step to step; the rigid
@@ -901,6 +1004,11 @@ impl Simulation {
             return Err(fail(
                 "a checkpoint restores only into a freshly built simulation that has not stepped yet".into(),
             ));
+        }
+        // The objects spawned by the checkpoint's time exist before its state is restored.
+        if !self.spawns.is_empty() {
+            let header = crate::io::checkpoint::read_header(path)?;
+            self.fire_spawns(header.time_s, false)?;
         }
         let hash = self.scene_hash();
         let (_, state) = crate::io::checkpoint::read(path, hash, &self.settings.name)?;

@@ -64,6 +64,9 @@ pub struct OutputMesh {
     pub set: NodeSetHandle,
     /// Its cells.
     pub cells: OutputCells,
+    /// Simulated time from which it exists (−∞, or the time of the spawn that added it), s:
+    /// the `.pvd` lists it in the frames from then on.
+    pub first_time_s: f64,
 }
 
 /// Writes frames and the step log.
@@ -106,6 +109,7 @@ impl Output {
             label: label.to_string(),
             set,
             cells,
+            first_time_s: f64::NEG_INFINITY,
         });
     }
 
@@ -192,6 +196,7 @@ impl Output {
                 self.meshes
                     .iter()
                     .enumerate()
+                    .filter(move |(_, m)| t >= m.first_time_s)
                     .map(move |(k, m)| (t, k, format!("{name}_{}_{f:05}.vtu", file_label(&m.label))))
             })
             .collect();

@@ -29,6 +29,7 @@ pub mod rigid_box_incline_friction;
 pub mod rigid_box_rests_on_soft_block;
 pub mod rigid_box_stack_rests;
 pub mod servo_reaches_and_holds;
+pub mod spawned_bodies;
 pub mod stark_replicas_match_reference;
 pub mod stress_fields_match_uniaxial_tension;
 pub mod urdf_bad_input_gives_clear_errors;
