@@ -11,6 +11,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
 
+mod grasp;
 mod plot;
 mod sweep;
 mod view;
@@ -224,6 +225,7 @@ fn run_with_progress(
     duration: f64,
     opts: &RunOptions,
     mut check: Option<&mut CheckReport>,
+    mut grasp: Option<&mut grasp::GraspRun>,
 ) -> stark::Result<RunEnd> {
     if let Some(every) = opts.checkpoint_every {
         if !(every > 0.0 && every.is_finite()) {
@@ -264,6 +266,9 @@ fn run_with_progress(
             "step {} · {:.2} Newton/step",
             sum.steps, sum.newton_iterations_per_step
         ));
+        if let Some(g) = grasp.as_deref_mut() {
+            g.after_step(s);
+        }
         match check.as_deref_mut() {
             Some(report) => check_step(s, report),
             None => Ok(()),
@@ -498,7 +503,12 @@ fn run_built(sim: &mut Simulation, duration: f64, opts: &RunOptions, check: bool
     }
     let out = sim.settings.output.directory.clone();
     let mut check_report = CheckReport::default();
-    let end = run_with_progress(sim, duration, opts, check.then_some(&mut check_report))?;
+    let mut grasp = grasp::GraspRun::find(sim);
+    let end = run_with_progress(sim, duration, opts, check.then_some(&mut check_report), grasp.as_mut())?;
+    if let Some(g) = grasp.as_mut() {
+        // The callback runs before each step; this watches the state after the last one.
+        g.after_step(sim);
+    }
     if check && !end.interrupted {
         // The callback runs before each step; this checks the state after the last one.
         check_step(sim, &mut check_report)?;
@@ -515,6 +525,9 @@ fn run_built(sim: &mut Simulation, duration: f64, opts: &RunOptions, check: bool
     print_logs(sim);
     print_rigid_summary(sim, &summary);
     print_robot_towel_outcome(sim);
+    if let Some(g) = &grasp {
+        g.report(sim);
+    }
     if !opts.no_plot && sim.settings.output.step_log {
         let log = out.join(format!("{}.steps.jsonl", sim.settings.name));
         let png = out.join(format!("{}.summary.png", sim.settings.name));

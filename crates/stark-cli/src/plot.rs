@@ -396,7 +396,7 @@ pub fn picture(meshes: &[PictureMesh], title: &str, region: Option<[[f64; 3]; 2]
     let root = root.titled(title, ("sans-serif", 20)).map_err(|e| plot_err(png, e))?;
     let (top, side) = root.split_vertically(top_h);
     let views: [(&DrawingArea<_, _>, usize, String); 2] = [
-        (&top, 0, "top view: y (driving direction) → right, x ↑".to_string()),
+        (&top, 0, "top view: y → right, x ↑".to_string()),
         (
             &side,
             2,

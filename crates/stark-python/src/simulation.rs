@@ -376,8 +376,48 @@ impl Simulation {
     /// files rebuild their time events; closures added with `add_time_event` must be added
     /// again first) and not stepped yet. Another scene, a truncated file or another format
     /// version raise `StarkError` saying which.
-    fn restore_checkpoint(&self, path: std::path::PathBuf) -> PyResult<()> {
-        self.with(|s| s.restore_checkpoint(&path))
+    fn restore_checkpoint(slf: &Bound<'_, Self>, path: std::path::PathBuf) -> PyResult<()> {
+        // Served like a step: the restore fires the spawns due by the checkpoint's time.
+        Self::drive(slf, |s| s.restore_checkpoint(&path))
+    }
+
+    /// Add objects during the run: `action(sim)` runs once, when the simulated time first
+    /// reaches `time_s` (before the first step when `time_s <= 0`, else right after the step that
+    /// reaches it). It adds rigid bodies or deformables, their friction and initial state, as
+    /// when building. What it adds must not intersect anything (the step raises `StarkError`
+    /// naming the spawn). `restore_checkpoint` fires the spawns due by the checkpoint's time
+    /// before restoring, so a resumed run must add the same spawns first, and the action must add
+    /// the same objects whatever the state.
+    fn add_spawn(&self, time_s: f64, label: &str, action: Py<PyAny>) -> PyResult<()> {
+        Python::attach(|py| {
+            if !action.bind(py).is_callable() {
+                return Err(PyTypeError::new_err("the spawn action must be callable"));
+            }
+            Ok(())
+        })?;
+        let index = {
+            let mut events = self.events.lock().unwrap_or_else(|e| e.into_inner());
+            events.push(Some(action));
+            events.len() - 1
+        };
+        self.with(|s| {
+            s.add_spawn(time_s, label, move |sim| {
+                Self::serve(sim, |py, obj| {
+                    let action = obj.get().events.lock().unwrap_or_else(|e| e.into_inner())[index]
+                        .as_ref()
+                        .map(|a| a.clone_ref(py));
+                    match action {
+                        Some(a) => a.call1(py, (obj,)).map(|_| ()),
+                        None => Err(stark_err("the spawn's action was cleared")),
+                    }
+                })
+            })
+        })
+    }
+
+    /// Spawns added with `add_spawn`, as `(time_s, label, fired)`.
+    fn spawns(&self) -> PyResult<Vec<(f64, String, bool)>> {
+        self.with(|s| Ok(s.spawns().into_iter().map(|(t, l, f)| (t, l.to_string(), f)).collect()))
     }
 
     /// Run `action(sim, t)` before every step whose end time `t` lies in `[t0, t1)`: move

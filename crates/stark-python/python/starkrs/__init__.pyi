@@ -839,6 +839,15 @@ class Simulation:
         """
     def add_time_event(self, t0: float, t1: float, action: Callable[[Simulation, float], Any]) -> None:
         """Run `action(sim, t)` before every step whose end time `t` lies in `[t0, t1)`."""
+    def add_spawn(self, time_s: float, label: str, action: Callable[[Simulation], Any]) -> None:
+        """Add objects during the run: `action(sim)` runs once when the time first reaches `time_s`.
+
+        It runs right after the step that reaches `time_s` (before the first step when
+        `time_s <= 0`). What it adds must not intersect anything. `restore_checkpoint` fires the
+        spawns due by the checkpoint's time first: add the same spawns before restoring.
+        """
+    def spawns(self) -> list[tuple[float, str, bool]]:
+        """Spawns added with `add_spawn`: `(time_s, label, fired)`."""
     def add_energy(
         self,
         name: str,

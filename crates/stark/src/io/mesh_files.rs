@@ -337,7 +337,14 @@ fn weld(path: &Path, mesh: Mesh<3>) -> Result<Mesh<3>, MeshFileError> {
 /// [`MeshFileError::NotFound`], [`MeshFileError::Io`] or [`MeshFileError::Stl`].
 pub fn load_stl(path: impl AsRef<Path>) -> Result<Mesh<3>, MeshFileError> {
     let path = path.as_ref();
-    let bytes = read_to_bytes(path)?;
+    parse_stl(&read_to_bytes(path)?, path)
+}
+
+/// [`load_stl`] of a file's bytes (e.g. compiled into a program); `path` names it in errors.
+///
+/// # Errors
+/// [`MeshFileError::Stl`].
+pub fn parse_stl(bytes: &[u8], path: &Path) -> Result<Mesh<3>, MeshFileError> {
     let indexed = stl_io::read_stl(&mut io::Cursor::new(bytes)).map_err(|source| MeshFileError::Stl {
         path: path.to_owned(),
         source,

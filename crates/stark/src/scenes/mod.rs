@@ -1,6 +1,7 @@
 //! Built-in scenes, including exact replicas of the original Stark's shipped scenes
 //! (`reference/benchmark-scenes.md`) used for validation and benchmarks.
 
+pub mod franka_cup;
 pub mod kobuki_towel;
 pub mod robot_towel_outcome;
 
@@ -198,12 +199,48 @@ fn builtin_scenes_without_suites() -> Vec<BuiltinScene> {
             build: tunneling,
         },
         BuiltinScene {
+            name: "franka_cup",
+            description: "The paper's grasp: a Franka hand holds a PET cup (5 N, μ 0.5) while 14 g steel balls are poured in, one every 0.2 s, until it slips",
+            duration_s: franka_cup::DURATION_S,
+            build: franka_cup_scene,
+        },
+        BuiltinScene {
+            name: "franka_rigid_box",
+            description: "The check of franka_cup: a rigid 50 g box in the same hand, pulled down by a force growing at 1 N/s, slips at μ·ΣN",
+            duration_s: 4.0,
+            build: franka_box_scene,
+        },
+        BuiltinScene {
             name: "towel_box",
             description: "The paper's towel (5757 nodes, folded twice) on a fixed floor under a 3 kg rigid box: dense self-contact, d̂ = 3.25 mm, dt = 5 ms, residual 1e-6 N",
             duration_s: TOWEL_BOX_DURATION_S,
             build: towel_box,
         },
     ]
+}
+
+/// The built-in `franka_cup` (see [`franka_cup`]).
+pub fn franka_cup_scene(mut settings: Settings) -> Result<Simulation> {
+    settings.name = "franka_cup".into();
+    settings.time_step_s = 0.005;
+    settings.newton.residual_tolerance_n = 1e-6;
+    Ok(franka_cup::build(settings, franka_cup::FrankaCupOptions::default())?.0)
+}
+
+/// The built-in `franka_rigid_box`: [`franka_cup`] with a rigid box pulled down instead of the cup.
+pub fn franka_box_scene(mut settings: Settings) -> Result<Simulation> {
+    settings.name = "franka_rigid_box".into();
+    settings.time_step_s = 0.005;
+    settings.newton.residual_tolerance_n = 1e-6;
+    let options = franka_cup::FrankaCupOptions {
+        held: franka_cup::Held::RigidBox {
+            size_m: [0.04, 0.05, 0.06],
+            mass_kg: 0.05,
+            pull_rate_n_s: 1.0,
+        },
+        ..Default::default()
+    };
+    Ok(franka_cup::build(settings, options)?.0)
 }
 
 /// The built-in scene called `name`.

@@ -1,0 +1,121 @@
+//! What `stark run` adds for the grasp scenes (`franka_cup`, `franka_rigid_box`): a picture of
+//! the state when the grasp slips, the outcome against the Coulomb threshold, and the plot of
+//! the load against the friction capacity.
+
+use crate::plot;
+use stark::scenes::franka_cup::{self, GraspOutcome};
+use stark::Simulation;
+use std::path::PathBuf;
+
+/// The slip watch of a run, with where its picture goes.
+pub struct GraspRun {
+    watch: franka_cup::SlipWatch,
+    pour_start_s: f64,
+}
+
+fn probe_log(sim: &Simulation) -> PathBuf {
+    sim.settings
+        .output
+        .directory
+        .join(format!("{}.{}.jsonl", sim.settings.name, franka_cup::PROBE))
+}
+
+impl GraspRun {
+    /// For simulations built by `franka_cup::build` with the default schedule (the built-in
+    /// scenes); a resumed run continues its watch from the probe log.
+    pub fn find(sim: &Simulation) -> Option<GraspRun> {
+        let pour_start_s = franka_cup::FrankaCupOptions::default().pour_start_s;
+        let mut watch = franka_cup::SlipWatch::find(sim, pour_start_s)?;
+        if sim.summary().steps > 0 {
+            if let Err(e) = watch.resume_from_log(&probe_log(sim)) {
+                eprintln!("warning: the slip watch starts afresh: {e}");
+            }
+        }
+        Some(GraspRun { watch, pour_start_s })
+    }
+
+    /// After every step: draw the state when the grasp slips.
+    pub fn after_step(&mut self, sim: &Simulation) {
+        if !self.watch.update(sim) {
+            return;
+        }
+        let png = sim
+            .settings
+            .output
+            .directory
+            .join(format!("{}.slip.png", sim.settings.name));
+        let meshes: Vec<_> = plot::picture_meshes(sim)
+            .into_iter()
+            .filter(|m| m.label != "floor" && m.label != "franka/fr3_hand")
+            .collect();
+        let title = format!("{}: the grasp slips at t = {:.3} s", sim.settings.name, sim.time());
+        // Around the cup and the jaws.
+        let region = [[-0.06, -0.06, -0.01], [0.06, 0.06, 0.14]];
+        if let Err(e) = plot::picture(&meshes, &title, Some(region), &png) {
+            eprintln!("warning: no picture of the slip: {e}");
+        }
+    }
+
+    /// Print the outcome and draw the plot of load and capacity.
+    pub fn report(&self, sim: &Simulation) {
+        let log = probe_log(sim);
+        if !sim.settings.output.step_log || !log.exists() {
+            return;
+        }
+        match franka_cup::grasp_outcome(&log, self.pour_start_s) {
+            Ok(o) => print_outcome(&o),
+            Err(e) => {
+                eprintln!("warning: no grasp outcome: {e}");
+                return;
+            }
+        }
+        let png = sim
+            .settings
+            .output
+            .directory
+            .join(format!("{}.grasp.png", sim.settings.name));
+        let series = [
+            "grasp.load_n",
+            "grasp.capacity_n",
+            "grasp.friction_on_held_n",
+            "grasp.normal_force_n",
+            "grasp.grip_force_n",
+            "grasp.balls_in_cup",
+            "grasp.held_z_m",
+        ]
+        .map(String::from);
+        match plot::plot_logs(&[log], &series, Some(&png)) {
+            Ok(p) => println!("grasp plot            {}", p.display()),
+            Err(e) => eprintln!("warning: no grasp plot: {e}"),
+        }
+    }
+}
+
+fn print_outcome(o: &GraspOutcome) {
+    let a = &o.at;
+    let sum_n = a.normal_force_n[0] + a.normal_force_n[1];
+    match o.slip_time_s {
+        Some(t) => println!(
+            "grasp                 slipped at t = {t:.3} s ({} balls in the cup): load {:.3} N against a friction capacity \
+             μ·ΣN = {:.3} N (ΣN = {:.3} + {:.3} = {sum_n:.3} N), {:+.1}%; the paper: 20 balls, 2.8 N against 2.5 N (+12%)",
+            a.balls_in_cup,
+            a.load_n,
+            a.capacity_n,
+            a.normal_force_n[0],
+            a.normal_force_n[1],
+            100.0 * (o.load_over_capacity - 1.0)
+        ),
+        None => println!(
+            "grasp                 held to the end ({} balls in the cup): load {:.3} N against a friction capacity {:.3} N; \
+             drop {:.3} mm",
+            a.balls_in_cup,
+            a.load_n,
+            a.capacity_n,
+            1e3 * o.final_drop_m
+        ),
+    }
+    println!(
+        "                      largest load/capacity while holding: {:.3} at t = {:.3} s",
+        o.max_held_ratio.0, o.max_held_ratio.1
+    );
+}

@@ -1,0 +1,664 @@
+//! The paper's grasp (§IV-B, Fig. 4): a Franka hand holds a thin PET cup while 14 g steel balls
+//! are poured in, until the grasp slips.
+//!
+//! - Hand: the published Franka hand URDF (`assets/robots/franka_description`, Apache-2.0),
+//!   fixed upside down; finger 1 on a force-limited press closing the jaws at 100 mm/s
+//!   (relative, 50 mm/s each) with at most 5 N, finger 2 following through the URDF's mimic.
+//!   With the mimic, the press force is the sum of the two jaws' normal forces in equilibrium
+//!   (virtual work: `F δq = N_left δq + N_right δq`), so the friction capacity is
+//!   `μ (N_left + N_right)` = μ · 5 N = 2.5 N, the paper's threshold. The fingers collide through
+//!   their URDF boxes (the rubber tips grasp), the hand through its collision STL.
+//! - Cup ([`meshes::cup_mesh`]): about 10 cm tall, rim radius 27 mm tapering to 22 mm at the
+//!   bottom, a rolled lip of 1.5 mm radius; PET membrane `E·h` = 1e6 N/m (3.3 GPa × 0.3 mm),
+//!   ν 0.45, discrete-shell bending 1e-4 N·m, 0.2 kg/m²; no self-contact (as in the original).
+//!   The tips grasp just below the lip, which can latch onto them when the cup slips.
+//! - The cup stands on a frictionless floor that slides away once the jaws hold it; then balls
+//!   (r 7.5 mm, 14 g, steel) are spawned above the cup at a steady rate ([`Simulation::add_spawn`]).
+//! - d̂ = 0.5 mm everywhere; μ 0.5 jaw–cup, 0.3 ball–cup and ball–ball.
+//!
+//! [`Held::RigidBox`] puts a rigid box in the same hand instead of the cup and pulls it down with
+//! a force growing at a steady rate: the check that the jaws slip at μ·ΣN.
+//!
+//! Every step a probe (`<scene>.grasp.jsonl`) records the press force, the normal and friction
+//! forces on each jaw (the contact forces of the step's solve summed over the finger's mesh),
+//! the vertical load (the weight of the held object and of the balls inside it) and the held
+//! object's height; [`grasp_outcome`] finds the slip from the log.
+
+use crate::error::{Result, StarkError};
+use crate::presets::meshes::{self, CupShape};
+use crate::presets::SurfaceMaterial;
+use crate::rigidbodies::joints::JointHandle;
+use crate::rigidbodies::{RigidBodyHandle, Shape};
+use crate::robots::urdf::{Actuator, JointOverride, LinkOverride, RobotOptions};
+use crate::simulation::Simulation;
+use crate::solver::Settings;
+use crate::state::NO_BODY;
+use nalgebra::{Rotation3, UnitQuaternion, Vector3};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// The Franka hand's URDF (the published file, xacro expanded).
+pub const FRANKA_HAND_URDF: &str = include_str!("../../assets/robots/franka_description/urdf/franka_hand.urdf");
+/// The hand's collision mesh.
+const HAND_STL: &[u8] =
+    include_bytes!("../../assets/robots/franka_description/meshes/robot_ee/franka_hand_white/collision/hand.stl");
+
+/// Jaw–cup friction coefficient (the paper).
+pub const MU_JAW: f64 = 0.5;
+/// The press's force cap, N: the sum of the two jaws' normal forces (see the module docs).
+pub const GRIP_FORCE_N: f64 = 5.0;
+/// Relative closing speed of the jaws, m/s.
+pub const CLOSING_SPEED_M_S: f64 = 0.1;
+/// Contact activation distance `d̂`, m (each object's thickness is half of it).
+pub const DHAT_M: f64 = 5e-4;
+/// Steel ball radius, m.
+pub const BALL_RADIUS_M: f64 = 0.0075;
+/// Steel ball mass, kg (7850 kg/m³ × 4/3 π r³ = 13.9 g).
+pub const BALL_MASS_KG: f64 = 0.014;
+/// Ball–cup and ball–ball friction.
+pub const MU_BALL: f64 = 0.3;
+/// Name of the probe log: `<scene>.grasp.jsonl`.
+pub const PROBE: &str = "grasp";
+/// The cup slips when it has moved this far down relative to the jaws since the pour began, m.
+pub const SLIP_M: f64 = 1e-3;
+
+/// Initial opening of each finger, m (70 mm between the jaws).
+const FINGER_OPEN_M: f64 = 0.035;
+/// The finger frame is this far below the hand frame, m (URDF joint origin).
+const FINGER_OFFSET_M: f64 = 0.0584;
+/// The rubber tip's box: centre below the finger frame and half height, m (URDF).
+const TIP_CENTRE_M: f64 = 0.04525;
+const TIP_HALF_HEIGHT_M: f64 = 0.00925;
+/// The tips' top edge is this far below the rim, m: the lip (radius 1.5 mm, reaching 1.5 mm
+/// below the rim) overhangs them and can latch.
+const TIP_BELOW_RIM_M: f64 = 0.004;
+
+/// What the hand holds.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Held {
+    /// The PET cup.
+    Cup(CupShape),
+    /// A rigid box (size along x, y (the jaw axis), z, m; mass, kg), pulled down by a force
+    /// growing at `pull_rate_n_s` from the pour's start.
+    RigidBox {
+        /// Size, m.
+        size_m: [f64; 3],
+        /// Mass, kg.
+        mass_kg: f64,
+        /// Growth of the downward pull, N/s.
+        pull_rate_n_s: f64,
+    },
+}
+
+/// The scene's schedule and options.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FrankaCupOptions {
+    /// What the hand holds.
+    pub held: Held,
+    /// The floor slides away (along x) during this interval, s.
+    pub floor_away_s: [f64; 2],
+    /// The first ball (or the box's pull) starts at this time, s.
+    pub pour_start_s: f64,
+    /// Time between balls, s.
+    pub pour_every_s: f64,
+    /// Number of balls.
+    pub balls: usize,
+    /// Jaw friction coefficient.
+    pub mu_jaw: f64,
+    /// The press's force cap, N.
+    pub grip_force_n: f64,
+}
+
+impl Default for FrankaCupOptions {
+    fn default() -> Self {
+        FrankaCupOptions {
+            held: Held::Cup(CupShape::default()),
+            floor_away_s: [0.6, 1.0],
+            pour_start_s: 1.2,
+            pour_every_s: 0.2,
+            balls: 30,
+            mu_jaw: MU_JAW,
+            grip_force_n: GRIP_FORCE_N,
+        }
+    }
+}
+
+/// Duration of the built-in run, s: the grasp, the floor away and 30 balls.
+pub const DURATION_S: f64 = 8.0;
+
+/// Handles of a built scene.
+#[derive(Clone, Debug)]
+pub struct FrankaCup {
+    /// The options it was built with.
+    pub options: FrankaCupOptions,
+    /// The finger bodies: left (the press's), right.
+    pub fingers: [RigidBodyHandle; 2],
+    /// The press on finger 1.
+    pub press: JointHandle,
+    /// The held object: the cup's nodes or the box's body.
+    pub held: HeldHandle,
+}
+
+/// The held object in the simulation.
+#[derive(Clone, Copy, Debug)]
+pub enum HeldHandle {
+    /// The cup's nodes.
+    Cup(crate::deformables::NodeSetHandle),
+    /// The box.
+    RigidBox(RigidBodyHandle),
+}
+
+/// One line of the probe log.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct GraspSample {
+    /// The press's force (the jaws' closing force), N.
+    pub grip_force_n: f64,
+    /// Normal (barrier) force on each jaw along the jaw axis (the squeeze): left, right, N.
+    pub normal_force_n: [f64; 2],
+    /// Friction force on each jaw, vertical component (positive up), N: the held object pulls
+    /// the jaws down through friction.
+    pub friction_up_n: [f64; 2],
+    /// Friction capacity `μ (N_left + N_right)`, N.
+    pub capacity_n: f64,
+    /// Total vertical friction the jaws exert on the held object (positive up), N.
+    pub friction_on_held_n: f64,
+    /// Total vertical contact force (normal and friction) the jaws exert on the held object
+    /// (positive up), N: where the shell wraps around a tip's edge, normal forces carry some of
+    /// the load too.
+    pub support_n: f64,
+    /// The vertical load: weight of the held object (and of the balls inside it), plus the box's
+    /// pull, N.
+    pub load_n: f64,
+    /// Balls spawned so far.
+    pub balls: usize,
+    /// Balls inside the cup (centre within its radius and below its rim).
+    pub balls_in_cup: usize,
+    /// Height of the held object (the cup's mean node height, or the box's centre), m.
+    pub held_z_m: f64,
+    /// Height of the jaws (the fingers' centres), m.
+    pub jaw_z_m: f64,
+}
+
+fn bad(message: String) -> StarkError {
+    StarkError::InvalidInput(message)
+}
+
+/// The cup's material (see the module docs); `h` 0.3 mm.
+pub fn cup_material() -> SurfaceMaterial {
+    let thickness_m = 3e-4;
+    let membrane_n_m = 1e6;
+    // A light Rayleigh damping (β = 1 ms) takes out the membrane's ringing without slowing the
+    // cup's motion.
+    let beta_s = 1e-3;
+    let bending = 1e-4;
+    SurfaceMaterial {
+        inertia: crate::deformables::InertiaParams {
+            density: 0.2,
+            damping: 0.0,
+            quasistatic: false,
+        },
+        strain: crate::deformables::TriangleStrainParams {
+            thickness_m,
+            youngs_modulus: membrane_n_m / thickness_m,
+            poissons_ratio: 0.45,
+            damping: beta_s * membrane_n_m,
+            ..Default::default()
+        },
+        bending: crate::presets::Bending::Dihedral(crate::deformables::DihedralBendingParams {
+            stiffness: bending,
+            damping: beta_s * bending,
+        }),
+        contact_thickness_m: Some(DHAT_M / 2.0),
+    }
+}
+
+/// Where ball `k` goes: above the opening, at one of five places across it in turn, lowered to
+/// [`BALL_DROP_M`] above what it will land on (the cup's bottom or the balls in it,
+/// [`Contact::clearance_below`](crate::contact::Contact::clearance_below)), at rest, so that the
+/// cup is loaded by the balls' weight rather than by impacts. (A ball dropped from the rim onto
+/// the bottom, 10 cm, brings 0.02 N·s; stopping it together with the 4 g cup takes the jaws'
+/// spare friction, 2.3 N, 9 ms, in which the cup slides about 5 mm: a pour from high above
+/// measures impacts, not the static grasp.)
+fn ball_drop_position(
+    sim: &Simulation,
+    cup: crate::deformables::NodeSetHandle,
+    shape: &CupShape,
+    k: usize,
+) -> Vector3<f64> {
+    let p = sim.positions(cup);
+    let centre: Vector3<f64> = p.iter().sum::<Vector3<f64>>() / p.len() as f64;
+    let top = p.iter().map(|v| v.z).fold(f64::NEG_INFINITY, f64::max);
+    let ring_m = 0.75 * (shape.bottom_radius_m - BALL_RADIUS_M);
+    let places = [(0.0, 0.0), (ring_m, 0.0), (0.0, ring_m), (-ring_m, 0.0), (0.0, -ring_m)];
+    let (x, y) = places[k % places.len()];
+    let start = Vector3::new(centre.x + x, centre.y + y, top + BALL_RADIUS_M + 1e-3);
+    let ball = meshes::sphere_mesh(BALL_RADIUS_M, 2);
+    let vertices: Vec<Vector3<f64>> = ball.vertices.iter().map(|v| v + start).collect();
+    let fall = sim
+        .contact
+        .clearance_below(&sim.nodes.x, &vertices, &ball.elements)
+        .map_or(0.0, |c| (c - BALL_DROP_M).max(0.0));
+    start - Vector3::new(0.0, 0.0, fall)
+}
+
+/// Height above its support from which a ball is dropped, m.
+pub const BALL_DROP_M: f64 = 2e-3;
+
+/// Build the scene with `options` (see the module docs).
+pub fn build(mut settings: Settings, options: FrankaCupOptions) -> Result<(Simulation, FrankaCup)> {
+    settings.contact.default_thickness_m = Some(DHAT_M / 2.0);
+    // A stiff membrane on light nodes: CG converges slowly where the factorisation is cheap.
+    settings.newton.linear_solver = crate::solver::LinearSolver::Cholesky;
+    let g = Vector3::from(settings.gravity_m_s2);
+    let mut sim = Simulation::new(settings)?;
+
+    // ---- The held object, standing on the floor at z = 0 ----
+    let gap = 0.6 * DHAT_M;
+    let (held, held_contact, top_z) = match &options.held {
+        Held::Cup(shape) => {
+            let mesh = meshes::cup_mesh(shape)?;
+            let vertices: Vec<_> = mesh.vertices.iter().map(|v| v + Vector3::new(0.0, 0.0, gap)).collect();
+            let cup = sim.add_surface("cup", &vertices, &mesh.elements, &cup_material())?;
+            let contact = cup.contact.expect("the cup has a contact thickness");
+            sim.contact.set_collision(contact, contact, false)?;
+            (HeldHandle::Cup(cup.nodes), contact, gap + shape.height_m)
+        }
+        Held::RigidBox {
+            size_m,
+            mass_kg,
+            pull_rate_n_s,
+        } => {
+            if !(pull_rate_n_s.is_finite() && *pull_rate_n_s >= 0.0) {
+                return Err(bad(format!("pull_rate_n_s = {pull_rate_n_s} must be non-negative")));
+            }
+            let size = Vector3::from(*size_m);
+            let b = sim.add_box(
+                "box",
+                *mass_kg,
+                size,
+                Vector3::new(0.0, 0.0, gap + size.z / 2.0),
+                UnitQuaternion::identity(),
+                None,
+            )?;
+            // The rigid stand-in for the cup: the tips grasp its top (no lip).
+            (HeldHandle::RigidBox(b.body), b.mesh.contact, gap + size.z)
+        }
+    };
+
+    // ---- Floor: a slab under the object, frictionless, that slides away along +x ----
+    let floor_size = Vector3::new(0.2, 0.2, 0.02);
+    let mut floor = meshes::box_mesh(floor_size);
+    for v in &mut floor.vertices {
+        v.z -= floor_size.z / 2.0;
+    }
+    let floor = sim.add_prescribed_surface("floor", &floor.vertices, &floor.elements, DHAT_M / 2.0, 1e6)?;
+    let [away0, away1] = options.floor_away_s;
+    if !(away0.is_finite() && away1 > away0) {
+        return Err(bad(format!(
+            "floor_away_s = {:?} must be an increasing interval",
+            options.floor_away_s
+        )));
+    }
+    let prescribed = floor.prescribed;
+    sim.add_time_event(away0, f64::INFINITY, move |sim, t| {
+        // Smoothly (cosine) from rest to 0.25 m along x.
+        let s = ((t - away0) / (away1 - away0)).clamp(0.0, 1.0);
+        let x = 0.25 * 0.5 * (1.0 - (std::f64::consts::PI * s).cos());
+        sim.deformables
+            .prescribed
+            .set_transform(prescribed, Vector3::new(x, 0.0, 0.0), Rotation3::identity())
+    });
+
+    // ---- Hand: upside down, the tips' top edge `TIP_BELOW_RIM_M` below the rim ----
+    let tip_top_below_hand = FINGER_OFFSET_M + TIP_CENTRE_M - TIP_HALF_HEIGHT_M;
+    let hand_z = top_z - TIP_BELOW_RIM_M + tip_top_below_hand;
+    let hand_mesh = crate::io::mesh_files::parse_stl(HAND_STL, Path::new("hand.stl"))?;
+    let mut robot_options = RobotOptions {
+        fixed_base: true,
+        position_m: Vector3::new(0.0, 0.0, hand_z),
+        orientation: UnitQuaternion::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI),
+        self_collision: false,
+        contact_thickness_m: Some(DHAT_M / 2.0),
+        ..Default::default()
+    };
+    robot_options.links.insert(
+        "fr3_hand".into(),
+        LinkOverride {
+            collision_shape: Some(Shape::Mesh {
+                vertices_m: hand_mesh.vertices,
+                triangles: hand_mesh.elements,
+                scale: Vector3::repeat(1.0),
+            }),
+            ..Default::default()
+        },
+    );
+    if !(options.grip_force_n > 0.0 && options.grip_force_n.is_finite()) {
+        return Err(bad(format!("grip_force_n = {} must be positive", options.grip_force_n)));
+    }
+    robot_options.joints.insert(
+        "fr3_finger_joint1".into(),
+        JointOverride {
+            position: Some(FINGER_OPEN_M),
+            actuator: Some(Actuator::Press {
+                target_m_s: -CLOSING_SPEED_M_S / 2.0,
+                max_force_n: Some(options.grip_force_n),
+            }),
+            ..Default::default()
+        },
+    );
+    robot_options.joints.insert(
+        "fr3_finger_joint2".into(),
+        JointOverride {
+            position: Some(FINGER_OPEN_M),
+            ..Default::default()
+        },
+    );
+    let hand = sim.add_robot_from_str(
+        "franka",
+        FRANKA_HAND_URDF,
+        "franka_hand.urdf",
+        Path::new("."),
+        &robot_options,
+    )?;
+    let finger = |link: &str| {
+        hand.body(link)
+            .ok_or_else(|| bad(format!("the hand has no link {link}")))
+    };
+    let fingers = [finger("fr3_leftfinger")?, finger("fr3_rightfinger")?];
+    let press = hand
+        .joint("fr3_finger_joint1")
+        .cloned()
+        .ok_or_else(|| bad("the hand has no fr3_finger_joint1".into()))?;
+
+    // ---- Friction ----
+    for m in &hand.collision_meshes {
+        let mu = if fingers.contains(&m.body) { options.mu_jaw } else { 0.0 };
+        sim.contact.set_friction(m.contact, held_contact, mu)?;
+    }
+    if !(options.mu_jaw >= 0.0 && options.mu_jaw.is_finite()) {
+        return Err(bad(format!("mu_jaw = {} must be non-negative", options.mu_jaw)));
+    }
+
+    // ---- The pour (or the box's pull) ----
+    if !(options.pour_start_s.is_finite() && options.pour_every_s > 0.0) {
+        return Err(bad("pour_start_s must be finite and pour_every_s positive".into()));
+    }
+    match (&options.held, held) {
+        (Held::Cup(shape), HeldHandle::Cup(cup)) => {
+            let shape = shape.clone();
+            for k in 0..options.balls {
+                let t = options.pour_start_s + k as f64 * options.pour_every_s;
+                let shape = shape.clone();
+                sim.add_spawn(t, &format!("ball {}", k + 1), move |sim| {
+                    let at = ball_drop_position(sim, cup, &shape, k);
+                    let ball = sim.add_sphere(
+                        &format!("ball{}", k + 1),
+                        BALL_MASS_KG,
+                        BALL_RADIUS_M,
+                        2,
+                        at,
+                        UnitQuaternion::identity(),
+                        None,
+                    )?;
+                    let mine = ball.mesh.contact;
+                    for other in 0..sim.contact.objects().len() {
+                        let other = crate::contact::ContactHandle(other as u32);
+                        if other == mine {
+                            continue;
+                        }
+                        let label = &sim.contact.objects()[other.0 as usize].label;
+                        let mu = if label == "cup" || label.starts_with("ball") {
+                            MU_BALL
+                        } else {
+                            0.0
+                        };
+                        sim.contact.set_friction(mine, other, mu)?;
+                    }
+                    Ok(())
+                })?;
+            }
+        }
+        (Held::RigidBox { pull_rate_n_s, .. }, HeldHandle::RigidBox(body)) => {
+            let (start, rate) = (options.pour_start_s, *pull_rate_n_s);
+            sim.add_time_event(start, f64::INFINITY, move |sim, t| {
+                sim.set_body_force(body, Vector3::new(0.0, 0.0, -rate * (t - start)))
+            });
+        }
+        _ => unreachable!("the handle matches the option"),
+    }
+
+    let handles = FrankaCup {
+        options,
+        fingers,
+        press,
+        held,
+    };
+    let probe = handles.clone();
+    sim.add_probe(PROBE, move |sim| probe.sample(sim, g))?;
+    Ok((sim, handles))
+}
+
+impl FrankaCup {
+    /// The grasp's readouts at the last accepted step.
+    pub fn sample(&self, sim: &Simulation, gravity: Vector3<f64>) -> GraspSample {
+        let x = &sim.nodes.x;
+        let (normal, friction) = sim.contact.solve_forces(x);
+        let mut n_jaw = [Vector3::zeros(); 2];
+        let mut f_jaw = [Vector3::zeros(); 2];
+        for i in 0..x.len() {
+            let b = sim.nodes.body[i];
+            if b == NO_BODY {
+                continue;
+            }
+            for k in 0..2 {
+                if b as usize == self.fingers[k].i() {
+                    n_jaw[k] += normal[i];
+                    f_jaw[k] += friction[i];
+                }
+            }
+        }
+        // The squeeze: the normal forces along the jaw axis (world y).
+        let normal_force_n = [n_jaw[0].y.abs(), n_jaw[1].y.abs()];
+        let support_n = -(n_jaw[0].z + n_jaw[1].z + f_jaw[0].z + f_jaw[1].z);
+        let g = gravity.norm();
+        let jaw_z_m = 0.5 * (sim.body_position(self.fingers[0]).z + sim.body_position(self.fingers[1]).z);
+        let balls = sim.rigid_bodies.labels.iter().filter(|l| l.starts_with("ball")).count();
+        let (held_z_m, load_n, balls_in_cup) = match self.held {
+            HeldHandle::Cup(nodes) => {
+                let p = sim.positions(nodes);
+                let n = p.len() as f64;
+                let centre: Vector3<f64> = p.iter().sum::<Vector3<f64>>() / n;
+                let bottom = p.iter().map(|v| v.z).fold(f64::INFINITY, f64::min);
+                let Held::Cup(shape) = &self.options.held else {
+                    unreachable!("a cup handle comes with a cup")
+                };
+                let rim = bottom + shape.height_m;
+                let inside = (0..sim.num_rigid_bodies())
+                    .filter(|&b| sim.rigid_bodies.labels[b].starts_with("ball"))
+                    .filter(|&b| {
+                        let c = sim.bodies.position[b];
+                        c.z < rim && c.z > bottom && (c.xy() - centre.xy()).norm() < shape.rim_radius_m
+                    })
+                    .count();
+                let cup_mass = sim.deformables.inertia.node_masses(x.len())[nodes.range()]
+                    .iter()
+                    .sum::<f64>();
+                (centre.z, g * (cup_mass + inside as f64 * BALL_MASS_KG), inside)
+            }
+            HeldHandle::RigidBox(body) => {
+                let m = sim.bodies.mass[body.i()];
+                let pull = -sim.bodies.force[body.i()].z;
+                (sim.body_position(body).z, g * m + pull, 0)
+            }
+        };
+        GraspSample {
+            grip_force_n: sim.joint_state(&self.press).driver_effort.abs(),
+            normal_force_n,
+            friction_up_n: [f_jaw[0].z, f_jaw[1].z],
+            capacity_n: self.options.mu_jaw * (normal_force_n[0] + normal_force_n[1]),
+            friction_on_held_n: -(f_jaw[0].z + f_jaw[1].z),
+            support_n,
+            load_n,
+            balls,
+            balls_in_cup,
+            held_z_m,
+            jaw_z_m,
+        }
+    }
+}
+
+/// The slip found in a probe log.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct GraspOutcome {
+    /// The reference: the last step before the pour (or pull) starts, s.
+    pub reference_time_s: f64,
+    /// The first time the held object is `SLIP_M` lower relative to the jaws than at the
+    /// reference, s; `None`: it held.
+    pub slip_time_s: Option<f64>,
+    /// The sample at the slip (or at the end of the log).
+    pub at: GraspSample,
+    /// Load over capacity at the slip (or at the end).
+    pub load_over_capacity: f64,
+    /// The largest load over capacity while it held (before the slip), and when, s.
+    pub max_held_ratio: (f64, f64),
+    /// The cup's drop relative to the jaws at the end of the log, m.
+    pub final_drop_m: f64,
+}
+
+#[derive(Deserialize)]
+struct ProbeLine {
+    time_s: f64,
+    grasp: GraspSample,
+}
+
+/// Read a probe log and find the slip (see [`GraspOutcome`]); `pour_start_s` from the options.
+pub fn grasp_outcome(log: &Path, pour_start_s: f64) -> Result<GraspOutcome> {
+    let text =
+        std::fs::read_to_string(log).map_err(|e| bad(format!("cannot read the grasp log {}: {e}", log.display())))?;
+    let mut lines = Vec::new();
+    for (i, l) in text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty()) {
+        let line: ProbeLine = serde_json::from_str(l)
+            .map_err(|e| bad(format!("{}:{}: not a grasp probe line: {e}", log.display(), i + 1)))?;
+        lines.push(line);
+    }
+    let reference = lines.iter().rev().find(|l| l.time_s < pour_start_s).ok_or_else(|| {
+        bad(format!(
+            "{}: no step before the pour at {pour_start_s} s",
+            log.display()
+        ))
+    })?;
+    let rel = |s: &GraspSample| s.held_z_m - s.jaw_z_m;
+    let rel0 = rel(&reference.grasp);
+    let slip = lines
+        .iter()
+        .find(|l| l.time_s > reference.time_s && rel0 - rel(&l.grasp) > SLIP_M);
+    let last = lines.last().expect("the reference is a line");
+    let at = slip.unwrap_or(last);
+    let ratio = |s: &GraspSample| {
+        if s.capacity_n > 0.0 {
+            s.load_n / s.capacity_n
+        } else {
+            f64::INFINITY
+        }
+    };
+    let max_held_ratio = lines
+        .iter()
+        .filter(|l| l.time_s >= reference.time_s && slip.is_none_or(|s| l.time_s < s.time_s))
+        .map(|l| (ratio(&l.grasp), l.time_s))
+        .fold((0.0, reference.time_s), |a, b| if b.0 > a.0 { b } else { a });
+    Ok(GraspOutcome {
+        reference_time_s: reference.time_s,
+        slip_time_s: slip.map(|l| l.time_s),
+        at: at.grasp.clone(),
+        load_over_capacity: ratio(&at.grasp),
+        max_held_ratio,
+        final_drop_m: rel0 - rel(&last.grasp),
+    })
+}
+
+/// Watches a run of this scene for the slip while it runs (to act on it: `stark run` draws the
+/// state), with the same criterion as [`grasp_outcome`].
+#[derive(Clone, Debug)]
+pub struct SlipWatch {
+    pour_start_s: f64,
+    fingers: [RigidBodyHandle; 2],
+    held: HeldHandle,
+    /// Height of the held object relative to the jaws at the last step before the pour, m.
+    reference_m: Option<f64>,
+    slipped: bool,
+}
+
+impl SlipWatch {
+    /// For a simulation built by [`build`] (found by its labels: the fingers of robot `franka`
+    /// and a deformable `cup` or a rigid body `box`); `None` for other simulations.
+    pub fn find(sim: &Simulation, pour_start_s: f64) -> Option<Self> {
+        let left = sim.rigid_bodies.by_label("franka/fr3_leftfinger")?;
+        let right = sim.rigid_bodies.by_label("franka/fr3_rightfinger")?;
+        let held = match (sim.deformables.set_by_label("cup"), sim.rigid_bodies.by_label("box")) {
+            (Some(cup), _) => HeldHandle::Cup(cup),
+            (None, Some(b)) => HeldHandle::RigidBox(b),
+            (None, None) => return None,
+        };
+        Some(SlipWatch {
+            pour_start_s,
+            fingers: [left, right],
+            held,
+            reference_m: None,
+            slipped: false,
+        })
+    }
+
+    /// Continue a resumed run: the reference and whether it slipped already, from its probe log
+    /// (nothing to do when the log has no step of the pour yet).
+    pub fn resume_from_log(&mut self, log: &Path) -> Result<()> {
+        if !log.exists() {
+            return Ok(());
+        }
+        if let Ok(outcome) = grasp_outcome(log, self.pour_start_s) {
+            let text = std::fs::read_to_string(log).map_err(|e| bad(format!("cannot read {}: {e}", log.display())))?;
+            let poured = text
+                .lines()
+                .filter_map(|l| serde_json::from_str::<ProbeLine>(l).ok())
+                .any(|l| l.time_s >= self.pour_start_s);
+            if poured {
+                let reference = text
+                    .lines()
+                    .filter_map(|l| serde_json::from_str::<ProbeLine>(l).ok())
+                    .find(|l| l.time_s == outcome.reference_time_s)
+                    .map(|l| l.grasp.held_z_m - l.grasp.jaw_z_m);
+                self.reference_m = reference;
+                self.slipped = outcome.slip_time_s.is_some();
+            }
+        }
+        Ok(())
+    }
+
+    fn relative_height(&self, sim: &Simulation) -> f64 {
+        let jaw = 0.5 * (sim.body_position(self.fingers[0]).z + sim.body_position(self.fingers[1]).z);
+        let held = match self.held {
+            HeldHandle::Cup(nodes) => {
+                let p = sim.positions(nodes);
+                p.iter().map(|v| v.z).sum::<f64>() / p.len() as f64
+            }
+            HeldHandle::RigidBox(b) => sim.body_position(b).z,
+        };
+        held - jaw
+    }
+
+    /// Call after every step: `true` at the step where the held object has first moved
+    /// [`SLIP_M`] down relative to the jaws since the pour began.
+    pub fn update(&mut self, sim: &Simulation) -> bool {
+        let rel = self.relative_height(sim);
+        if sim.time() < self.pour_start_s {
+            self.reference_m = Some(rel);
+            return false;
+        }
+        match self.reference_m {
+            Some(r) if !self.slipped && r - rel > SLIP_M => {
+                self.slipped = true;
+                true
+            }
+            _ => false,
+        }
+    }
+}
