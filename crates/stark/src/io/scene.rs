@@ -633,11 +633,41 @@ struct Rotate {
     axis: [f64; 3],
 }
 
+/// `cup = { ... }`: a thin cup shell ([`meshes::cup_mesh`]); unset fields keep
+/// [`meshes::CupShape::default`]'s values.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CupGenerator {
+    height_m: Option<f64>,
+    rim_radius_m: Option<f64>,
+    bottom_radius_m: Option<f64>,
+    lip_radius_m: Option<f64>,
+    lip_angle_deg: Option<f64>,
+    segments: Option<usize>,
+    lip_max_row_angle_deg: Option<f64>,
+}
+
+impl CupGenerator {
+    fn shape(&self) -> meshes::CupShape {
+        let d = meshes::CupShape::default();
+        meshes::CupShape {
+            height_m: self.height_m.unwrap_or(d.height_m),
+            rim_radius_m: self.rim_radius_m.unwrap_or(d.rim_radius_m),
+            bottom_radius_m: self.bottom_radius_m.unwrap_or(d.bottom_radius_m),
+            lip_radius_m: self.lip_radius_m.unwrap_or(d.lip_radius_m),
+            lip_angle_deg: self.lip_angle_deg.unwrap_or(d.lip_angle_deg),
+            segments: self.segments.unwrap_or(d.segments),
+            lip_max_row_angle_deg: self.lip_max_row_angle_deg.unwrap_or(d.lip_max_row_angle_deg),
+        }
+    }
+}
+
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct SurfaceEntry {
     name: String,
     grid: Option<SurfaceGrid>,
+    cup: Option<CupGenerator>,
     mesh: Option<String>,
     vertices_m: Option<Vec<[f64; 3]>>,
     elements: Option<Vec<[usize; 3]>>,
@@ -1544,12 +1574,22 @@ fn build_surface(
     let key = geometry_key(
         ctx,
         at,
-        &[("grid", e.grid.is_some())],
+        &[("grid", e.grid.is_some()), ("cup", e.cup.is_some())],
         Some(e.mesh.is_some()),
         e.vertices_m.is_some(),
         ("elements", e.elements.is_some()),
     )?;
     let (mut vertices, triangles) = match key {
+        "cup" => {
+            let m = meshes::cup_mesh(&e.cup.as_ref().expect("checked").shape()).map_err(|err| match &err {
+                StarkError::InvalidParameter { field, .. } => {
+                    let field = field.to_string();
+                    ctx.stark(&at.keys(&["cup", &field]), err)
+                }
+                _ => ctx.stark(&at.key("cup"), err),
+            })?;
+            (m.vertices, m.elements)
+        }
         "grid" => {
             let g = e.grid.as_ref().expect("checked");
             check_grid(ctx, &at.key("grid"), &g.size_m, &g.quads, "quads")?;
@@ -2038,38 +2078,46 @@ fn contact_pair(
     objects: &[(String, SceneObject)],
     names: &[String; 2],
 ) -> std::result::Result<[ContactHandle; 2], SceneError> {
-    let mut handles = [ContactHandle(0); 2];
-    for (i, name) in names.iter().enumerate() {
-        let at = at.key("objects").index(i);
-        let object = find_object(ctx, &at, objects, name)?;
-        handles[i] = object.contact().ok_or_else(|| {
-            let with: Vec<_> = objects
-                .iter()
-                .filter(|(_, o)| o.contact().is_some())
-                .map(|(n, _)| n.as_str())
-                .collect();
-            let why = if let SceneObject::RigidBody(_) = object {
-                "rigid body '{name}' takes no part in contact: it has no contact thickness or `contact = false` \
-                 (give it `contact_thickness_m` or set `settings.contact.default_thickness_m`)"
-            } else {
-                "object '{name}' takes no part in contact: it has no contact thickness (set `contact_thickness_m` \
-                 in its material or `settings.contact.default_thickness_m`)"
-            };
-            ctx.err(
-                &at,
-                format!(
-                    "{}; objects with contact: {}",
-                    why.replace("{name}", name),
-                    if with.is_empty() {
-                        "none".to_string()
-                    } else {
-                        with.join(", ")
-                    }
-                ),
-            )
-        })?;
-    }
-    Ok(handles)
+    Ok([
+        contact_of(ctx, &at.key("objects").index(0), objects, &names[0])?,
+        contact_of(ctx, &at.key("objects").index(1), objects, &names[1])?,
+    ])
+}
+
+/// The contact object of the object `name` (located at `at` in errors).
+fn contact_of(
+    ctx: &Ctx,
+    at: &At,
+    objects: &[(String, SceneObject)],
+    name: &str,
+) -> std::result::Result<ContactHandle, SceneError> {
+    let object = find_object(ctx, at, objects, name)?;
+    object.contact().ok_or_else(|| {
+        let with: Vec<_> = objects
+            .iter()
+            .filter(|(_, o)| o.contact().is_some())
+            .map(|(n, _)| n.as_str())
+            .collect();
+        let why = if let SceneObject::RigidBody(_) = object {
+            "rigid body '{name}' takes no part in contact: it has no contact thickness or `contact = false` \
+             (give it `contact_thickness_m` or set `settings.contact.default_thickness_m`)"
+        } else {
+            "object '{name}' takes no part in contact: it has no contact thickness (set `contact_thickness_m` \
+             in its material or `settings.contact.default_thickness_m`)"
+        };
+        ctx.err(
+            at,
+            format!(
+                "{}; objects with contact: {}",
+                why.replace("{name}", name),
+                if with.is_empty() {
+                    "none".to_string()
+                } else {
+                    with.join(", ")
+                }
+            ),
+        )
+    })
 }
 
 fn add_friction(
@@ -2232,7 +2280,30 @@ fn build(
         objects.push((e.name.clone(), SceneObject::Obstacle(h)));
     }
     let mut joints = Vec::new();
-    for (i, e) in file.rigid_body.iter().enumerate() {
+    // Bodies with `spawn` are added during the run (after the friction entries are known).
+    let spawned: Vec<(usize, &rigid::RigidBodyEntry)> = file
+        .rigid_body
+        .iter()
+        .enumerate()
+        .filter(|(_, e)| e.spawn.is_some())
+        .collect();
+    for &(i, e) in &spawned {
+        let count = e.spawn.as_ref().map_or(0, |s| s.count);
+        if let Some((_, j, name)) = seen
+            .iter()
+            .find(|(_, _, n)| (1..=count).any(|k| **n == rigid::spawned_name(&e.name, k)))
+        {
+            return Err(ctx.err(
+                &At::entry("rigid_body", i).key("name"),
+                format!(
+                    "the copies of spawned '{}' would take the name '{name}' of object #{}",
+                    e.name,
+                    j + 1
+                ),
+            ));
+        }
+    }
+    for (i, e) in file.rigid_body.iter().enumerate().filter(|(_, e)| e.spawn.is_none()) {
         let (h, fix) = rigid::build_rigid_body(&mut sim, ctx, base_dir, &At::entry("rigid_body", i), e)?;
         objects.push((e.name.clone(), SceneObject::RigidBody(h)));
         joints.extend(fix);
@@ -2260,11 +2331,61 @@ fn build(
         }
         robots.push(r);
     }
+    let spawned_count = |name: &str| {
+        spawned
+            .iter()
+            .find(|(_, e)| e.name == name)
+            .and_then(|(_, e)| e.spawn.as_ref())
+            .map(|s| s.count)
+    };
+    // Friction with spawned bodies is set when each copy is added.
+    let mut spawned_friction: Vec<Vec<(rigid::FrictionPartner, f64)>> = vec![Vec::new(); spawned.len()];
     for (i, e) in file.friction.iter().enumerate() {
-        add_friction(&mut sim, ctx, &At::entry("friction", i), &objects, e)?;
+        let at = At::entry("friction", i);
+        let sides = [spawned_count(&e.objects[0]), spawned_count(&e.objects[1])];
+        if sides == [None, None] {
+            add_friction(&mut sim, ctx, &at, &objects, e)?;
+            continue;
+        }
+        if !(e.mu >= 0.0 && e.mu.is_finite()) {
+            return Err(ctx.err(&at.key("mu"), format!("mu = {} must be non-negative and finite", e.mu)));
+        }
+        for side in 0..2 {
+            let Some(k) = spawned.iter().position(|(_, s)| s.name == e.objects[side]) else {
+                continue;
+            };
+            let other = &e.objects[1 - side];
+            let partner = match sides[1 - side] {
+                Some(count) => rigid::FrictionPartner::Spawned {
+                    name: other.clone(),
+                    count,
+                },
+                None => rigid::FrictionPartner::Present(contact_of(
+                    ctx,
+                    &at.key("objects").index(1 - side),
+                    &objects,
+                    other,
+                )?),
+            };
+            spawned_friction[k].push((partner, e.mu));
+            if e.objects[0] == e.objects[1] {
+                break;
+            }
+        }
     }
     for (i, e) in file.disable_collision.iter().enumerate() {
-        add_disable_collision(&mut sim, ctx, &At::entry("disable_collision", i), &objects, e)?;
+        let at = At::entry("disable_collision", i);
+        if let Some(name) = e.objects.iter().find(|n| spawned_count(n).is_some()) {
+            return Err(ctx.err(
+                &at.key("objects"),
+                format!("'{name}' is spawned during the run: spawned bodies take `[[friction]]` entries but not `[[disable_collision]]`"),
+            ));
+        }
+        add_disable_collision(&mut sim, ctx, &at, &objects, e)?;
+    }
+    for (k, &(i, e)) in spawned.iter().enumerate() {
+        let friction = std::mem::take(&mut spawned_friction[k]);
+        rigid::spawn_rigid_body(&mut sim, ctx, base_dir, &At::entry("rigid_body", i), e, friction)?;
     }
     let mut prescribed = Vec::new();
     for (i, e) in file.prescribed.iter().enumerate() {
@@ -3093,6 +3214,56 @@ to_m_s2 = [0.0, 0.0, -1.0]
         let t = sim.time();
         let expected = -9.81 + (9.81 - 1.0) * t;
         assert!((sim.gravity().z - expected).abs() < 1e-12);
+    }
+
+    #[test]
+    fn franka_cup_scene_matches_the_builtin() {
+        let scene = load_scene_with(&repo_scene("franka_cup.toml"), quiet).unwrap();
+        let mut from_file = scene.simulation;
+        let mut settings = Settings::default();
+        quiet(&mut settings);
+        let mut builtin = crate::scenes::franka_cup_scene(settings).unwrap();
+        from_file.settings.name = builtin.settings.name.clone();
+        assert_eq!(from_file.settings, builtin.settings);
+        assert_eq!(from_file.nodes.len(), builtin.nodes.len());
+        let close = |a: &[Vector3<f64>], b: &[Vector3<f64>]| a.iter().zip(b).all(|(p, q)| (p - q).norm() < 1e-12);
+        assert!(close(&from_file.nodes.x, &builtin.nodes.x));
+        assert!(close(&from_file.nodes.rest, &builtin.nodes.rest));
+        let labels = |s: &Simulation| -> Vec<(String, f64)> {
+            s.contact
+                .objects()
+                .iter()
+                .map(|o| (o.label.clone(), o.thickness_m))
+                .collect()
+        };
+        assert_eq!(labels(&from_file), labels(&builtin));
+        let n = from_file.contact.objects().len();
+        for a in 0..n {
+            for b in 0..n {
+                let (ha, hb) = (ContactHandle(a as u32), ContactHandle(b as u32));
+                let (cf, cb) = (&from_file.contact, &builtin.contact);
+                assert_eq!(cf.friction(ha, hb).unwrap(), cb.friction(ha, hb).unwrap(), "{a} {b}");
+                assert_eq!(
+                    cf.collision_enabled(ha, hb).unwrap(),
+                    cb.collision_enabled(ha, hb).unwrap()
+                );
+            }
+        }
+        let spawns = |s: &Simulation| -> Vec<(f64, String)> {
+            s.spawns().into_iter().map(|(t, l, _)| (t, l.to_string())).collect()
+        };
+        assert_eq!(spawns(&from_file), spawns(&builtin));
+        // A few steps of the closing jaws agree (the hand's height is written out in the file).
+        for _ in 0..3 {
+            from_file.step().unwrap();
+            builtin.step().unwrap();
+        }
+        assert!(from_file
+            .nodes
+            .x
+            .iter()
+            .zip(&builtin.nodes.x)
+            .all(|(p, q)| (p - q).norm() < 1e-9));
     }
 
     #[test]

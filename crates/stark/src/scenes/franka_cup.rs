@@ -33,7 +33,7 @@ use crate::robots::urdf::{Actuator, JointOverride, LinkOverride, RobotOptions};
 use crate::simulation::Simulation;
 use crate::solver::Settings;
 use crate::state::NO_BODY;
-use nalgebra::{Rotation3, UnitQuaternion, Vector3};
+use nalgebra::{UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -212,33 +212,18 @@ pub fn cup_material() -> SurfaceMaterial {
     }
 }
 
-/// Where ball `k` goes: above the opening, at one of five places across it in turn, lowered to
-/// [`BALL_DROP_M`] above what it will land on (the cup's bottom or the balls in it,
-/// [`Contact::clearance_below`](crate::contact::Contact::clearance_below)), at rest, so that the
-/// cup is loaded by the balls' weight rather than by impacts. (A ball dropped from the rim onto
-/// the bottom, 10 cm, brings 0.02 N·s; stopping it together with the 4 g cup takes the jaws'
-/// spare friction, 2.3 N, 9 ms, in which the cup slides about 5 mm: a pour from high above
-/// measures impacts, not the static grasp.)
-fn ball_drop_position(
-    sim: &Simulation,
-    cup: crate::deformables::NodeSetHandle,
-    shape: &CupShape,
-    k: usize,
-) -> Vector3<f64> {
-    let p = sim.positions(cup);
-    let centre: Vector3<f64> = p.iter().sum::<Vector3<f64>>() / p.len() as f64;
-    let top = p.iter().map(|v| v.z).fold(f64::NEG_INFINITY, f64::max);
+/// Where the balls start, in turn: five places across the opening (the centre and four around
+/// it over the bottom), just above the lip. Each is then lowered to [`BALL_DROP_M`] above what it
+/// will land on (the cup's bottom or the balls in it,
+/// [`Contact::clearance_below`](crate::contact::Contact::clearance_below)) and released at rest,
+/// so that the cup is loaded by the balls' weight rather than by impacts. (A ball dropped from
+/// the rim onto the bottom, 10 cm, brings 0.02 N·s; stopping it together with the 4 g cup takes
+/// the jaws' spare friction, 2.3 N, 9 ms, in which the cup slides about 5 mm: a pour from high
+/// above measures impacts, not the static grasp.)
+pub fn ball_places(shape: &CupShape, rim_z_m: f64) -> [Vector3<f64>; 5] {
     let ring_m = 0.75 * (shape.bottom_radius_m - BALL_RADIUS_M);
-    let places = [(0.0, 0.0), (ring_m, 0.0), (0.0, ring_m), (-ring_m, 0.0), (0.0, -ring_m)];
-    let (x, y) = places[k % places.len()];
-    let start = Vector3::new(centre.x + x, centre.y + y, top + BALL_RADIUS_M + 1e-3);
-    let ball = meshes::sphere_mesh(BALL_RADIUS_M, 2);
-    let vertices: Vec<Vector3<f64>> = ball.vertices.iter().map(|v| v + start).collect();
-    let fall = sim
-        .contact
-        .clearance_below(&sim.nodes.x, &vertices, &ball.elements)
-        .map_or(0.0, |c| (c - BALL_DROP_M).max(0.0));
-    start - Vector3::new(0.0, 0.0, fall)
+    let z = rim_z_m + shape.lip_radius_m + BALL_RADIUS_M + 1e-3;
+    [(0.0, 0.0), (ring_m, 0.0), (0.0, ring_m), (-ring_m, 0.0), (0.0, -ring_m)].map(|(x, y)| Vector3::new(x, y, z))
 }
 
 /// Height above its support from which a ball is dropped, m.
@@ -299,15 +284,15 @@ pub fn build(mut settings: Settings, options: FrankaCupOptions) -> Result<(Simul
             options.floor_away_s
         )));
     }
+    // At a steady 0.625 m/s along x: 0.25 m, clear of the cup (the scene file's `motion`).
+    let motion = crate::io::scene::Motion {
+        start_s: away0,
+        end_s: away1,
+        velocity_m_s: [0.25 / (away1 - away0), 0.0, 0.0],
+        ..Default::default()
+    };
     let prescribed = floor.prescribed;
-    sim.add_time_event(away0, f64::INFINITY, move |sim, t| {
-        // Smoothly (cosine) from rest to 0.25 m along x.
-        let s = ((t - away0) / (away1 - away0)).clamp(0.0, 1.0);
-        let x = 0.25 * 0.5 * (1.0 - (std::f64::consts::PI * s).cos());
-        sim.deformables
-            .prescribed
-            .set_transform(prescribed, Vector3::new(x, 0.0, 0.0), Rotation3::identity())
-    });
+    sim.add_time_event(away0, f64::INFINITY, move |sim, t| motion.apply(sim, prescribed, t));
 
     // ---- Hand: upside down, the tips' top edge `TIP_BELOW_RIM_M` below the rim ----
     let tip_top_below_hand = FINGER_OFFSET_M + TIP_CENTRE_M - TIP_HALF_HEIGHT_M;
@@ -384,15 +369,24 @@ pub fn build(mut settings: Settings, options: FrankaCupOptions) -> Result<(Simul
         return Err(bad("pour_start_s must be finite and pour_every_s positive".into()));
     }
     match (&options.held, held) {
-        (Held::Cup(shape), HeldHandle::Cup(cup)) => {
-            let shape = shape.clone();
-            for k in 0..options.balls {
-                let t = options.pour_start_s + k as f64 * options.pour_every_s;
-                let shape = shape.clone();
-                sim.add_spawn(t, &format!("ball {}", k + 1), move |sim| {
-                    let at = ball_drop_position(sim, cup, &shape, k);
-                    let ball = sim.add_sphere(
-                        &format!("ball{}", k + 1),
+        (Held::Cup(shape), HeldHandle::Cup(_)) => {
+            let places = ball_places(shape, top_z);
+            let ball = meshes::sphere_mesh(BALL_RADIUS_M, 2);
+            for k in 1..=options.balls {
+                let t = options.pour_start_s + (k - 1) as f64 * options.pour_every_s;
+                let start = places[(k - 1) % places.len()];
+                let ball = ball.clone();
+                let label = format!("ball_{k}");
+                sim.add_spawn(t, &label.clone(), move |sim| {
+                    // At rest, `BALL_DROP_M` above what it will land on.
+                    let vertices: Vec<Vector3<f64>> = ball.vertices.iter().map(|v| v + start).collect();
+                    let fall = sim
+                        .contact
+                        .clearance_below(&sim.nodes.x, &vertices, &ball.elements)
+                        .map_or(0.0, |c| (c - BALL_DROP_M).max(0.0));
+                    let at = start - Vector3::new(0.0, 0.0, fall);
+                    let b = sim.add_sphere(
+                        &label,
                         BALL_MASS_KG,
                         BALL_RADIUS_M,
                         2,
@@ -400,19 +394,14 @@ pub fn build(mut settings: Settings, options: FrankaCupOptions) -> Result<(Simul
                         UnitQuaternion::identity(),
                         None,
                     )?;
-                    let mine = ball.mesh.contact;
-                    for other in 0..sim.contact.objects().len() {
-                        let other = crate::contact::ContactHandle(other as u32);
-                        if other == mine {
-                            continue;
+                    let mine = b.mesh.contact;
+                    if let Some(cup) = sim.contact.object_by_label("cup") {
+                        sim.contact.set_friction(mine, cup, MU_BALL)?;
+                    }
+                    for j in 1..k {
+                        if let Some(other) = sim.contact.object_by_label(&format!("ball_{j}")) {
+                            sim.contact.set_friction(mine, other, MU_BALL)?;
                         }
-                        let label = &sim.contact.objects()[other.0 as usize].label;
-                        let mu = if label == "cup" || label.starts_with("ball") {
-                            MU_BALL
-                        } else {
-                            0.0
-                        };
-                        sim.contact.set_friction(mine, other, mu)?;
                     }
                     Ok(())
                 })?;
