@@ -217,6 +217,18 @@ fn classify_robot_towel(py: Python<'_>, log: PathBuf) -> PyResult<Bound<'_, PyAn
     py.import("json")?.call_method1("loads", (text,))
 }
 
+/// The grasp's slip from a `franka_cup` (or `franka_rigid_box`) probe log
+/// (`<out>/<scene>.grasp.jsonl`), as `stark run` reports it: a dict with `reference_time_s`,
+/// `slip_time_s` (None: it held), `at` (the readouts at the slip, or at the end),
+/// `load_over_capacity`, `max_held_ratio` and `final_drop_m`.
+#[pyfunction]
+#[pyo3(signature = (log, pour_start_s=1.2))]
+fn grasp_outcome(py: Python<'_>, log: PathBuf, pour_start_s: f64) -> PyResult<Bound<'_, PyAny>> {
+    let o = guarded(|| stark::scenes::franka_cup::grasp_outcome(&log, pour_start_s))?;
+    let text = serde_json::to_string(&o).map_err(|e| stark_err(e.to_string()))?;
+    py.import("json")?.call_method1("loads", (text,))
+}
+
 /// The lab's outcome (Table I) of a built-in robot–towel scene, or None for other names.
 #[pyfunction]
 fn robot_towel_lab_outcome(name: &str) -> Option<String> {
@@ -226,6 +238,7 @@ fn robot_towel_lab_outcome(name: &str) -> Option<String> {
 /// Register the functions and classes.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(classify_robot_towel, m)?)?;
+    m.add_function(wrap_pyfunction!(grasp_outcome, m)?)?;
     m.add_function(wrap_pyfunction!(robot_towel_lab_outcome, m)?)?;
     m.add_class::<Scene>()?;
     m.add_function(wrap_pyfunction!(load_scene, m)?)?;

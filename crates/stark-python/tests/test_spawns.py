@@ -18,7 +18,7 @@ def build(out):
     def spawn(k):
         def action(sim):
             ball = sim.add_sphere(f"ball{k}", 0.004, 0.005, 2, [0.03 * k, 0.0, 0.05])
-            sim.set_friction(ball, sim.contact_object("floor"), 0.5)
+            sim.set_friction(ball.mesh, sim.contact_object("floor"), 0.5)
         return action
 
     for k, t in enumerate([0.1, 0.2]):
@@ -29,10 +29,10 @@ def build(out):
 def test_spawned_balls_appear_at_their_time_and_resume_bit_identically(tmp_path):
     whole = build(tmp_path / "whole")
     whole.run(0.15)
-    assert whole.num_rigid_bodies() == 1
+    assert whole.num_rigid_bodies == 1
     assert whole.spawns() == [(0.1, "ball 0", True), (0.2, "ball 1", False)]
     whole.run(0.1)
-    assert whole.num_rigid_bodies() == 2
+    assert whole.num_rigid_bodies == 2
     whole.save_checkpoint(tmp_path / "a.ckpt")
     whole.run(0.3)
     ball = whole.rigid_body("ball0")
@@ -40,7 +40,7 @@ def test_spawned_balls_appear_at_their_time_and_resume_bit_identically(tmp_path)
 
     resumed = build(tmp_path / "resumed")
     resumed.restore_checkpoint(tmp_path / "a.ckpt")
-    assert resumed.num_rigid_bodies() == 2
+    assert resumed.num_rigid_bodies == 2
     resumed.run(0.3)
     for label in ["ball0", "ball1"]:
         a = whole.body_position(whole.rigid_body(label))
