@@ -36,23 +36,9 @@ impl GraspRun {
 
     /// After every step: draw the state when the grasp slips.
     pub fn after_step(&mut self, sim: &Simulation) {
-        if !self.watch.update(sim) {
-            return;
-        }
-        let png = sim
-            .settings
-            .output
-            .directory
-            .join(format!("{}.slip.png", sim.settings.name));
-        let meshes: Vec<_> = plot::picture_meshes(sim)
-            .into_iter()
-            .filter(|m| m.label != "floor" && m.label != "franka/fr3_hand")
-            .collect();
-        let title = format!("{}: the grasp slips at t = {:.3} s", sim.settings.name, sim.time());
-        // Around the cup and the jaws.
-        let region = [[-0.06, -0.06, -0.01], [0.06, 0.06, 0.14]];
-        if let Err(e) = plot::picture(&meshes, &title, Some(region), &png) {
-            eprintln!("warning: no picture of the slip: {e}");
+        if self.watch.update(sim) {
+            let title = format!("{}: the grasp slips at t = {:.3} s", sim.settings.name, sim.time());
+            draw_state(sim, "slip", &title);
         }
     }
 
@@ -61,6 +47,10 @@ impl GraspRun {
         let log = probe_log(sim);
         if !sim.settings.output.step_log || !log.exists() {
             return;
+        }
+        let title = format!("{} at t = {:.3} s", sim.settings.name, sim.time());
+        if let Some(png) = draw_state(sim, "final", &title) {
+            println!("final state           {}", png.display());
         }
         match franka_cup::grasp_outcome(&log, self.pour_start_s) {
             Ok(o) => print_outcome(&o),
@@ -87,6 +77,28 @@ impl GraspRun {
         match plot::plot_logs(&[log], &series, Some(&png)) {
             Ok(p) => println!("grasp plot            {}", p.display()),
             Err(e) => eprintln!("warning: no grasp plot: {e}"),
+        }
+    }
+}
+
+/// A picture of the cup (or box), the fingers and the balls: `<name>.<what>.png`.
+fn draw_state(sim: &Simulation, what: &str, title: &str) -> Option<PathBuf> {
+    let png = sim
+        .settings
+        .output
+        .directory
+        .join(format!("{}.{what}.png", sim.settings.name));
+    let meshes: Vec<_> = plot::picture_meshes(sim)
+        .into_iter()
+        .filter(|m| m.label != "floor" && m.label != "franka/fr3_hand")
+        .collect();
+    // Around the cup and the jaws.
+    let region = [[-0.06, -0.06, -0.01], [0.06, 0.06, 0.14]];
+    match plot::picture(&meshes, title, Some(region), &png) {
+        Ok(()) => Some(png),
+        Err(e) => {
+            eprintln!("warning: no picture of the {what} state: {e}");
+            None
         }
     }
 }

@@ -399,7 +399,8 @@ impl Simulation {
 
     /// Add objects during the run: `action(sim)` runs once, when the simulated time first
     /// reaches `time_s` (before the first step when `time_s <= 0`, else right after the step
-    /// that reaches it, so they are in that step's frame and logs). Use it to pour balls into a
+    /// that reaches it, so they are in that step's frame and logs; spawns due together fire in
+    /// the order of their times, then in the order added). Use it to pour balls into a
     /// cup or drop parts on a conveyor: the action adds rigid bodies, deformables, contact
     /// settings and friction as when building a scene, and sets their initial state.
     ///
@@ -441,10 +442,13 @@ impl Simulation {
             .collect()
     }
 
-    /// Fire every spawn due by time `t` in the order added. `check` tests the new objects for
+    /// Fire every spawn due by time `t`, earliest first. `check` tests the new objects for
     /// intersections (off when replaying spawns into a simulation about to be restored).
     fn fire_spawns(&mut self, t: f64, check: bool) -> Result<()> {
-        for k in 0..self.spawns.len() {
+        // By time, then in the order added: a replay fires them as the run did.
+        let mut order: Vec<usize> = (0..self.spawns.len()).collect();
+        order.sort_by(|&a, &b| self.spawns[a].time_s.total_cmp(&self.spawns[b].time_s).then(a.cmp(&b)));
+        for k in order {
             let due = self.spawns[k].action.is_some() && t >= self.spawns[k].time_s - SPAWN_TIME_TOLERANCE_S;
             if !due {
                 continue;

@@ -1,6 +1,7 @@
 //! Objects added during a run ([`Simulation::add_spawn`]): three 1 cm balls spawned at t = 0.1,
 //! 0.2 and 0.3 s above a kinematic floor fall, land and come to rest on it, with ball–floor and
-//! ball–ball friction set by the spawns. Every accepted step is checked with the exact
+//! ball–ball friction set by the spawns; a 4 cm cotton cloth (a deformable) spawned at 0.15 s
+//! falls beside them and lies on the floor. Every accepted step is checked with the exact
 //! intersection test; a ball exists from its spawn time on (before it, the simulation has fewer
 //! bodies; right after, it sits where it was spawned); a ball falls for its own time only.
 //!
@@ -40,6 +41,16 @@ fn build(out: &Path, frames: bool) -> Simulation {
     ];
     sim.add_prescribed_surface("floor", &floor, &[[0, 1, 2], [0, 2, 3]], THICKNESS_M, 1e7)
         .unwrap();
+    sim.add_spawn(0.15, "cloth", |sim| {
+        let grid = stark::presets::meshes::triangle_grid([-0.05, 0.0], [0.04, 0.04], [4, 4], 0.02);
+        let mut cotton = stark::presets::SurfaceMaterial::cotton_fabric();
+        cotton.contact_thickness_m = Some(THICKNESS_M);
+        let cloth = sim.add_surface("cloth", &grid.vertices, &grid.elements, &cotton)?;
+        let floor = sim.contact.object_by_label("floor").expect("the floor is there");
+        sim.contact
+            .set_friction(cloth.contact.expect("it has a thickness"), floor, 0.5)
+    })
+    .unwrap();
     for (k, &t) in SPAWN_TIMES_S.iter().enumerate() {
         sim.add_spawn(t, &format!("ball {k}"), move |sim| {
             let label = format!("ball{k}");
@@ -115,6 +126,16 @@ fn spawned_balls_fall_rest_and_resume_bit_identically() {
             "ball {k} at rest on the floor: z = {z}, |v| = {v}"
         );
     }
+    let cloth = full.deformables.set_by_label("cloth").unwrap();
+    let top = full
+        .positions(cloth)
+        .iter()
+        .map(|p| p.z)
+        .fold(f64::NEG_INFINITY, f64::max);
+    assert!(
+        (0.0..2e-3).contains(&top),
+        "the cloth lies on the floor: top at {top} m"
+    );
     // The frames list a ball from its spawn on: ball 2 (t = 0.3 s) is not in the frames at
     // 0, 0.05, ..., 0.25 s, and is in every frame after.
     let pvd = std::fs::read_to_string(dir.join("full").join(format!("{}.pvd", full.settings.name))).unwrap();
