@@ -498,8 +498,14 @@ impl Contact {
     pub fn barrier_forces(&mut self, x: &[Vector3<f64>]) -> Vec<Vector3<f64>> {
         let mut forces = vec![Vector3::zeros(); x.len()];
         let pairs = self.detect(x);
+        self.add_barrier_forces(&pairs, x, &mut forces);
+        forces
+    }
+
+    /// Add minus the barrier gradient of `pairs` at `x` to `forces`.
+    fn add_barrier_forces(&self, pairs: &[ContactPair], x: &[Vector3<f64>], forces: &mut [Vector3<f64>]) {
         let mut d = HyperDual::<4>::constant(0.0);
-        for p in &pairs {
+        for p in pairs {
             pair_derivatives(
                 p,
                 &Self::stencil_x(&p.nodes, x),
@@ -514,7 +520,6 @@ impl Contact {
                 }
             }
         }
-        forces
     }
 
     /// The contact forces of the last solve on every node at positions `x` (the converged
@@ -525,22 +530,8 @@ impl Contact {
     pub fn solve_forces(&self, x: &[Vector3<f64>]) -> (Vec<Vector3<f64>>, Vec<Vector3<f64>>) {
         let mut normal = vec![Vector3::zeros(); x.len()];
         let mut friction = vec![Vector3::zeros(); x.len()];
+        self.add_barrier_forces(&self.pairs, x, &mut normal);
         let mut d = HyperDual::<4>::constant(0.0);
-        for p in &self.pairs {
-            pair_derivatives(
-                p,
-                &Self::stencil_x(&p.nodes, x),
-                p.kappa * p.multiplicity,
-                self.settings.barrier,
-                PairHessian::GaussNewton,
-                &mut d,
-            );
-            for (k, &i) in p.nodes.iter().enumerate() {
-                if i != NO_DOF {
-                    normal[i as usize] -= Vector3::from(d.grad[k]);
-                }
-            }
-        }
         for f in &self.friction_elements {
             f.derivatives(&Self::stencil_x(&f.nodes, x), false, &mut d);
             for (k, &i) in f.nodes[..f.len].iter().enumerate() {

@@ -193,16 +193,7 @@ pub(super) fn spawn_rigid_body(
     let contact = match (e.contact, thickness) {
         (Some(false), _) | (None, None) => None,
         (_, Some(t)) => Some(t),
-        (Some(true), None) => {
-            return Err(ctx.err(
-                &at.key("contact"),
-                format!(
-                    "rigid body '{}' takes part in contact but has no contact thickness: give `contact_thickness_m` \
-                     or set `settings.contact.default_thickness_m`",
-                    e.name
-                ),
-            ))
-        }
+        (Some(true), None) => return Err(no_thickness(ctx, at, &e.name)),
     };
     let params = RigidBodyParams {
         linear_damping_1_s: e.linear_damping_1_s.unwrap_or(0.0),
@@ -253,7 +244,7 @@ pub(super) fn spawn_rigid_body(
             if let Some(t) = torque {
                 sim.set_body_torque(body, t)?;
             }
-            sim.set_body_params(body, params.clone())?;
+            sim.set_body_params(body, params)?;
             if let Some(mine) = mine {
                 for (partner, mu) in &friction {
                     match partner {
@@ -481,6 +472,17 @@ fn shape(ctx: &Ctx, base_dir: &Path, at: &At, e: &RigidBodyEntry) -> Res<BodySha
     })
 }
 
+/// `contact = true` without a contact thickness.
+fn no_thickness(ctx: &Ctx, at: &At, name: &str) -> SceneError {
+    ctx.err(
+        &at.key("contact"),
+        format!(
+            "rigid body '{name}' takes part in contact but has no contact thickness: give `contact_thickness_m` \
+             or set `settings.contact.default_thickness_m`"
+        ),
+    )
+}
+
 /// The poses of a keyframed body: its initial pose at t = 0, then each keyframe.
 type Poses = Vec<(f64, Vector3<f64>, UnitQuaternion<f64>)>;
 
@@ -565,16 +567,7 @@ pub(super) fn build_rigid_body(
                 .map_err(located("name"))?;
             (mesh.nodes, Some(mesh.contact))
         }
-        (Some(true), None) => {
-            return Err(ctx.err(
-                &at.key("contact"),
-                format!(
-                    "rigid body '{}' takes part in contact but has no contact thickness: give `contact_thickness_m` \
-                     or set `settings.contact.default_thickness_m`",
-                    e.name
-                ),
-            ))
-        }
+        (Some(true), None) => return Err(no_thickness(ctx, at, &e.name)),
     };
 
     if let Some(v) = e.velocity_m_s {
