@@ -445,12 +445,15 @@ impl Simulation {
     /// Fire every spawn due by time `t`, earliest first. `check` tests the new objects for
     /// intersections (off when replaying spawns into a simulation about to be restored).
     fn fire_spawns(&mut self, t: f64, check: bool) -> Result<()> {
+        let due = |s: &Spawn| s.action.is_some() && t >= s.time_s - SPAWN_TIME_TOLERANCE_S;
+        if !self.spawns.iter().any(due) {
+            return Ok(());
+        }
         // By time, then in the order added: a replay fires them as the run did.
         let mut order: Vec<usize> = (0..self.spawns.len()).collect();
         order.sort_by(|&a, &b| self.spawns[a].time_s.total_cmp(&self.spawns[b].time_s).then(a.cmp(&b)));
         for k in order {
-            let due = self.spawns[k].action.is_some() && t >= self.spawns[k].time_s - SPAWN_TIME_TOLERANCE_S;
-            if !due {
+            if !due(&self.spawns[k]) {
                 continue;
             }
             let action = self.spawns[k].action.take().expect("due spawns have their action");

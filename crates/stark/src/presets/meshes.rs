@@ -696,27 +696,13 @@ fn stitch_rings(vertices: &[Vector3<f64>], a: RevolutionRing, b: RevolutionRing,
 pub fn cup_mesh(shape: &CupShape) -> Result<Mesh<3>> {
     const OBJECT: &str = "cup_mesh";
     let positive = |v: f64| v > 0.0 && v.is_finite();
-    check_param(
-        OBJECT,
-        "height_m",
-        shape.height_m,
-        positive(shape.height_m),
-        "must be positive and finite",
-    )?;
-    check_param(
-        OBJECT,
-        "rim_radius_m",
-        shape.rim_radius_m,
-        positive(shape.rim_radius_m),
-        "must be positive and finite",
-    )?;
-    check_param(
-        OBJECT,
-        "bottom_radius_m",
-        shape.bottom_radius_m,
-        positive(shape.bottom_radius_m),
-        "must be positive and finite",
-    )?;
+    for (field, value) in [
+        ("height_m", shape.height_m),
+        ("rim_radius_m", shape.rim_radius_m),
+        ("bottom_radius_m", shape.bottom_radius_m),
+    ] {
+        check_param(OBJECT, field, value, positive(value), "must be positive and finite")?;
+    }
     check_param(
         OBJECT,
         "bottom_radius_m",

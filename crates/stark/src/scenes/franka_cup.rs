@@ -137,6 +137,8 @@ pub struct FrankaCup {
     pub press: JointHandle,
     /// The held object: the cup's nodes or the box's body.
     pub held: HeldHandle,
+    /// Its mass, kg.
+    pub held_mass_kg: f64,
 }
 
 /// The held object in the simulation.
@@ -356,12 +358,12 @@ pub fn build(mut settings: Settings, options: FrankaCupOptions) -> Result<(Simul
         .ok_or_else(|| bad("the hand has no fr3_finger_joint1".into()))?;
 
     // ---- Friction ----
+    if !(options.mu_jaw >= 0.0 && options.mu_jaw.is_finite()) {
+        return Err(bad(format!("mu_jaw = {} must be non-negative", options.mu_jaw)));
+    }
     for m in &hand.collision_meshes {
         let mu = if fingers.contains(&m.body) { options.mu_jaw } else { 0.0 };
         sim.contact.set_friction(m.contact, held_contact, mu)?;
-    }
-    if !(options.mu_jaw >= 0.0 && options.mu_jaw.is_finite()) {
-        return Err(bad(format!("mu_jaw = {} must be non-negative", options.mu_jaw)));
     }
 
     // ---- The pour (or the box's pull) ----
@@ -416,7 +418,14 @@ pub fn build(mut settings: Settings, options: FrankaCupOptions) -> Result<(Simul
         _ => unreachable!("the handle matches the option"),
     }
 
+    let held_mass_kg = match held {
+        HeldHandle::Cup(nodes) => sim.deformables.inertia.node_masses(sim.nodes.len())[nodes.range()]
+            .iter()
+            .sum(),
+        HeldHandle::RigidBox(b) => sim.bodies.mass[b.i()],
+    };
     let handles = FrankaCup {
+        held_mass_kg,
         options,
         fingers,
         press,
@@ -469,15 +478,11 @@ impl FrankaCup {
                         c.z < rim && c.z > bottom && (c.xy() - centre.xy()).norm() < shape.rim_radius_m
                     })
                     .count();
-                let cup_mass = sim.deformables.inertia.node_masses(x.len())[nodes.range()]
-                    .iter()
-                    .sum::<f64>();
-                (centre.z, g * (cup_mass + inside as f64 * BALL_MASS_KG), inside)
+                (centre.z, g * (self.held_mass_kg + inside as f64 * BALL_MASS_KG), inside)
             }
             HeldHandle::RigidBox(body) => {
-                let m = sim.bodies.mass[body.i()];
                 let pull = -sim.bodies.force[body.i()].z;
-                (sim.body_position(body).z, g * m + pull, 0)
+                (sim.body_position(body).z, g * self.held_mass_kg + pull, 0)
             }
         };
         GraspSample {
@@ -501,6 +506,8 @@ impl FrankaCup {
 pub struct GraspOutcome {
     /// The reference: the last step before the pour (or pull) starts, s.
     pub reference_time_s: f64,
+    /// The held object's height relative to the jaws then, m.
+    pub reference_height_m: f64,
     /// The first time the held object is `SLIP_M` lower relative to the jaws than at the
     /// reference, s; `None`: it held.
     pub slip_time_s: Option<f64>,
@@ -557,6 +564,7 @@ pub fn grasp_outcome(log: &Path, pour_start_s: f64) -> Result<GraspOutcome> {
         .fold((0.0, reference.time_s), |a, b| if b.0 > a.0 { b } else { a });
     Ok(GraspOutcome {
         reference_time_s: reference.time_s,
+        reference_height_m: rel0,
         slip_time_s: slip.map(|l| l.time_s),
         at: at.grasp.clone(),
         load_over_capacity: ratio(&at.grasp),
@@ -600,22 +608,10 @@ impl SlipWatch {
     /// Continue a resumed run: the reference and whether it slipped already, from its probe log
     /// (nothing to do when the log has no step of the pour yet).
     pub fn resume_from_log(&mut self, log: &Path) -> Result<()> {
-        if !log.exists() {
-            return Ok(());
-        }
-        if let Ok(outcome) = grasp_outcome(log, self.pour_start_s) {
-            let text = std::fs::read_to_string(log).map_err(|e| bad(format!("cannot read {}: {e}", log.display())))?;
-            let poured = text
-                .lines()
-                .filter_map(|l| serde_json::from_str::<ProbeLine>(l).ok())
-                .any(|l| l.time_s >= self.pour_start_s);
-            if poured {
-                let reference = text
-                    .lines()
-                    .filter_map(|l| serde_json::from_str::<ProbeLine>(l).ok())
-                    .find(|l| l.time_s == outcome.reference_time_s)
-                    .map(|l| l.grasp.held_z_m - l.grasp.jaw_z_m);
-                self.reference_m = reference;
+        // Before the pour the reference is taken again by `update` at every step anyway.
+        if log.exists() {
+            if let Ok(outcome) = grasp_outcome(log, self.pour_start_s) {
+                self.reference_m = Some(outcome.reference_height_m);
                 self.slipped = outcome.slip_time_s.is_some();
             }
         }

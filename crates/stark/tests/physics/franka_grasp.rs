@@ -27,14 +27,7 @@ fn quiet() -> Settings {
 }
 
 fn step_checked(sim: &mut Simulation) {
-    sim.step().unwrap();
-    let check = sim.state_check();
-    assert!(
-        check.intersections.is_empty(),
-        "t = {}: {:?}",
-        sim.time(),
-        &check.intersections[..1]
-    );
+    super::checks::step_checked(sim, "franka", &mut super::checks::ValidityTotals::default());
 }
 
 #[test]

@@ -82,14 +82,7 @@ fn build(out: &Path, frames: bool) -> Simulation {
 
 fn step_to(sim: &mut Simulation, t_end: f64) {
     while sim.time() < t_end - 1e-9 {
-        sim.step().unwrap();
-        let check = sim.state_check();
-        assert!(
-            check.intersections.is_empty(),
-            "t = {}: {:?}",
-            sim.time(),
-            check.intersections
-        );
+        super::checks::step_checked(sim, "spawned balls", &mut super::checks::ValidityTotals::default());
         // Ball k exists exactly from its spawn time on.
         let spawned = SPAWN_TIMES_S.iter().filter(|&&t| sim.time() >= t - 1e-9).count();
         assert_eq!(sim.num_rigid_bodies(), spawned, "t = {}", sim.time());
