@@ -702,15 +702,23 @@ impl Contact {
                 .par_iter()
                 .filter_map(|&(a, b)| self.edge_edge_pair(a as usize, b as usize, x)),
         );
-        found.par_sort_unstable_by(|a, b| (a.kind, a.nodes).cmp(&(b.kind, b.nodes)));
-        found.dedup_by(|later, kept| {
+        // Point–triangle and edge–edge pairs are one per candidate; a pair reduced to a point–point
+        // or point–edge distance can come from several candidates (a vertex near a fan of
+        // triangles): those are merged into one pair whose multiplicity counts them. Only they
+        // need the sort (the candidates' order is deterministic, and so is this one).
+        let (mut merged, unique): (Vec<ContactPair>, Vec<ContactPair>) = found
+            .into_iter()
+            .partition(|p| matches!(p.kind, PairKind::PointPoint | PairKind::PointEdge));
+        merged.sort_unstable_by(|a, b| (a.kind, a.nodes).cmp(&(b.kind, b.nodes)));
+        merged.dedup_by(|later, kept| {
             let same = later.kind == kept.kind && later.nodes == kept.nodes;
             if same {
                 kept.multiplicity += later.multiplicity;
             }
             same
         });
-        found
+        merged.extend(unique);
+        merged
     }
 
     /// Active pairs at positions `x`, from the cached candidates when they cover `x` (else a new
