@@ -709,7 +709,7 @@ impl Contact {
         let (mut merged, unique): (Vec<ContactPair>, Vec<ContactPair>) = found
             .into_iter()
             .partition(|p| matches!(p.kind, PairKind::PointPoint | PairKind::PointEdge));
-        merged.sort_unstable_by(|a, b| (a.kind, a.nodes).cmp(&(b.kind, b.nodes)));
+        merged.sort_unstable_by_key(|p| (p.kind, p.nodes));
         merged.dedup_by(|later, kept| {
             let same = later.kind == kept.kind && later.nodes == kept.nodes;
             if same {

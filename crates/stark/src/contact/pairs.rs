@@ -471,6 +471,20 @@ mod tests {
         }
     }
 
+    /// A pair on nodes 0–3 with d̂ = 0.5 m and ε_x = 1e-2 (points within ±0.2 m are in range).
+    fn unit_pair(kind: PairKind) -> ContactPair {
+        ContactPair {
+            kind,
+            nodes: [0, 1, 2, 3],
+            dhat: 0.5,
+            eps_x: 1e-2,
+            mu: 0.0,
+            kappa: 1.0,
+            objects: [0, 0],
+            multiplicity: 1.0,
+        }
+    }
+
     #[test]
     fn derivatives_of_every_pair_kind_match_the_oracle() {
         use Ee as R;
@@ -500,16 +514,7 @@ mod tests {
                         // Nearly parallel edges: the mollifier is active.
                         x[3] = x[2] + (x[1] - x[0]) * 0.9 + Vector3::new(0.01, -0.004, 0.002);
                     }
-                    let pair = ContactPair {
-                        kind,
-                        nodes: [0, 1, 2, 3],
-                        dhat: 0.5,
-                        eps_x: 1e-2,
-                        mu: 0.0,
-                        kappa: 1.0,
-                        objects: [0, 0],
-                        multiplicity: 1.0,
-                    };
+                    let pair = unit_pair(kind);
                     check(&pair, &x, barrier_kind);
                 }
             }
@@ -530,16 +535,7 @@ mod tests {
             Vector3::new(0.32, 0.015, 0.121),
         ];
         for region in [R::EaEb, R::EaEb1, R::Ea0Eb1] {
-            let pair = ContactPair {
-                kind: PairKind::EdgeEdgeMollified(region),
-                nodes: [0, 1, 2, 3],
-                dhat: 0.5,
-                eps_x: 1e-2,
-                mu: 0.0,
-                kappa: 1.0,
-                objects: [0, 0],
-                multiplicity: 1.0,
-            };
+            let pair = unit_pair(PairKind::EdgeEdgeMollified(region));
             let kappa = 2.5;
             let mut adaptive = HyperDual::<4>::constant(0.0);
             let mut exact = HyperDual::<4>::constant(0.0);

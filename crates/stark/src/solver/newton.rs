@@ -337,6 +337,9 @@ pub fn solve(
             report.residual_n = residual;
             report.iterations = iteration;
             if residual < settings.residual_tolerance_n {
+                if std::env::var_os("STARK_NEWTON_TRACE").is_some() {
+                    eprintln!("done it {iteration} res {residual:.3e}");
+                }
                 report.converged_by = ConvergedBy::Residual;
                 return Ok(report);
             }
@@ -520,6 +523,32 @@ pub fn solve(
                     t.use_majorizer_hessian(majorizer);
                 }
             }
+        }
+        if std::env::var_os("STARK_NEWTON_TRACE").is_some() {
+            // Diagnostics: one line per iteration on stderr (the residual, the accepted step
+            // fraction, the Hessians used, the DOF block of the step's largest entry).
+            eprintln!(
+                "it {iteration:2} res {residual:.3e} alpha {alpha:.3e} maj {majorizer} ls {} cg {} step {:.3e} at {}",
+                report.line_search_evaluations,
+                report.cg_iterations,
+                norm_inf(&ws.step),
+                {
+                    let d = (0..ws.step.len())
+                        .max_by(|&a, &b| ws.step[a].abs().total_cmp(&ws.step[b].abs()))
+                        .unwrap_or(0);
+                    let block = dofs.block_of_dof[d / 3] as usize;
+                    let nn = problem.nodes.len();
+                    if block < nn {
+                        format!("node {block}")
+                    } else {
+                        format!(
+                            "body {} {}",
+                            (block - nn) / 2,
+                            if (block - nn).is_multiple_of(2) { "lin" } else { "ang" }
+                        )
+                    }
+                }
+            );
         }
         std::mem::swap(v, &mut ws.trial_v);
         report.iterations = iteration + 1;
