@@ -322,10 +322,14 @@ pub fn pair_derivatives(
     if let PairKind::EdgeEdgeMollified(_) = pair.kind {
         let mut gb = [0.0; 12];
         let mut hb = [0.0; 144];
+        // The adaptive mode builds its own Hessian (below): only the others need the barrier's.
+        let exact_needed = hessian != PairHessian::Adaptive;
         for i in 0..n {
             gb[full(i)] = g[i];
             for j in 0..n {
-                hb[full(i) * 12 + full(j)] = h[i * n + j];
+                if exact_needed {
+                    hb[full(i) * 12 + full(j)] = h[i * n + j];
+                }
             }
         }
         let mut flat4 = [0.0; 12];
@@ -341,7 +345,7 @@ pub fn pair_derivatives(
         for i in 0..12 {
             og[i] = mo * gb[i] + e * m1 * gc[i];
         }
-        if hessian != PairHessian::Adaptive {
+        if exact_needed {
             for i in 0..12 {
                 let gm_i = m1 * gc[i];
                 for j in 0..12 {
