@@ -229,8 +229,8 @@ mirror! {
         max_line_search_iterations: usize,
         /// When element Hessians are projected: "always" or "on_demand" (default: "on_demand").
         projection: Choice<stark::solver::settings::Projection>,
-        /// Majorising Hessians (sliding friction) until a Newton step is taken in full, exact
-        /// ones after (default: true).
+        /// Stand-in Hessians (sliding friction's majoriser, contact barriers' PSD form) until a
+        /// Newton step is taken in full, exact ones after (default: true).
         majorizer_far_from_solution: bool,
     }
 }
@@ -272,7 +272,7 @@ mirror! {
         friction_stick_slide_threshold_m_s: f64,
         /// Friction solves per step (default: 1).
         friction_iterations: usize,
-        /// Barrier pair Hessian: "exact", "projected", "gauss_newton" or "adaptive" (default: "adaptive").
+        /// Barrier pair Hessian far from the solution (exact near it): "exact", "projected", "gauss_newton" or "adaptive" (default: "adaptive").
         hessian: Choice<stark::contact::PairHessian>,
         /// Continuous collision detection in the line search (default: True).
         ccd: bool,

@@ -103,8 +103,8 @@ class NewtonSettings:
     projection: Literal["always", "on_demand"]
     """When element Hessians are projected: "always" or "on_demand" (default: "on_demand")."""
     majorizer_far_from_solution: bool
-    """Majorising Hessians (sliding friction) until a Newton step is taken in full, exact
-    ones after (default: true)."""
+    """Stand-in Hessians (sliding friction's majoriser, contact barriers' PSD form) until a
+    Newton step is taken in full, exact ones after (default: true)."""
     def __new__(cls, *, residual_tolerance_n: float = ..., step_tolerance_m_s: float = ..., max_iterations: int = ..., linear_solver: Literal["pcg", "cholesky"] = ..., cg_max_iterations: int = ..., cg_relative_tolerance: float = ..., armijo: float = ..., max_line_search_iterations: int = ..., projection: Literal["always", "on_demand"] = ..., majorizer_far_from_solution: bool = ...) -> NewtonSettings:
         """Defaults of the library, with the given fields replaced."""
     def to_dict(self) -> dict[str, Any]:
@@ -158,7 +158,7 @@ class ContactSettings:
     friction_iterations: int
     """Friction solves per step (default: 1)."""
     hessian: Literal["exact", "projected", "gauss_newton", "adaptive"]
-    """Barrier pair Hessian: "exact", "projected", "gauss_newton" or "adaptive" (default: "adaptive")."""
+    """Barrier pair Hessian far from the solution (exact near it): "exact", "projected", "gauss_newton" or "adaptive" (default: "adaptive")."""
     ccd: bool
     """Continuous collision detection in the line search (default: True)."""
     def __new__(cls, *, default_thickness_m: Optional[float] = ..., barrier: Literal["log", "cubic"] = ..., stiffness: Optional[float] = ..., min_distance_fraction: float = ..., max_stiffness_factor: float = ..., friction_stick_slide_threshold_m_s: float = ..., friction_iterations: int = ..., hessian: Literal["exact", "projected", "gauss_newton", "adaptive"] = ..., ccd: bool = ...) -> ContactSettings:

@@ -87,6 +87,13 @@ pub trait EnergyTerm: Send + Sync {
     /// `contact::friction`.
     fn use_majorizer_hessian(&mut self, _on: bool) {}
 
+    /// Newton's globalisation, second switch: with `true`, a term whose exact Hessian is
+    /// indefinite near its active set assembles a positive semi-definite form (contact
+    /// barriers, far from the solution and where their exact Hessians made the total
+    /// indefinite); with `false` (the default), its exact Hessian. The solver still projects
+    /// every term when the total turns out indefinite with `true`.
+    fn use_definite_hessian(&mut self, _on: bool) {}
+
     /// Called once per step after the first assembly, with the total gradient (DOF space) at
     /// `state`: a term may re-scale itself to balance the others (contact raises its barrier
     /// stiffness to carry the load it is under). Returns whether it changed, so that the solver

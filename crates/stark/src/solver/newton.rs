@@ -270,6 +270,14 @@ pub fn solve(
     for t in terms.iter_mut() {
         t.use_majorizer_hessian(majorizer);
     }
+    // Likewise the positive semi-definite forms of the Hessians that are indefinite near their
+    // active set (contact barriers), and the residual below which their exact ones are tried
+    // (again), N.
+    let mut definite = settings.majorizer_far_from_solution;
+    let mut exact_barriers_below_n = f64::INFINITY;
+    for t in terms.iter_mut() {
+        t.use_definite_hessian(definite);
+    }
     let mut first_residual: Option<f64> = None;
     let mut rebalanced = false;
     // A Cholesky factorisation of this step's Hessian exists (see the linear solve).
@@ -394,7 +402,19 @@ pub fn solve(
             let usable = descent < 0.0 && ws.step.iter().all(|s| s.is_finite());
             report.times.linear_solve_s += t2.elapsed().as_secs_f64();
             if !project && (indefinite || !usable) {
-                // The exact Hessian is not positive definite here: project from now on.
+                if !definite {
+                    // The exact barrier Hessians make it indefinite here (their curvature is not
+                    // held by the inertia yet): back to their positive semi-definite form, and
+                    // the exact ones again once the residual fell tenfold from here (each failed
+                    // attempt costs an assembly and a solve).
+                    definite = true;
+                    exact_barriers_below_n = 0.1 * residual;
+                    for t in terms.iter_mut() {
+                        t.use_definite_hessian(true);
+                    }
+                    continue;
+                }
+                // The Hessian is not positive definite here: project from now on.
                 project = true;
                 report.projected = true;
                 continue;
@@ -523,12 +543,31 @@ pub fn solve(
                     t.use_majorizer_hessian(majorizer);
                 }
             }
+            // The barriers' exact Hessians likewise, once the residual is also below where they
+            // last made the Hessian indefinite. Their definite (projected) form overestimates
+            // the curvature that the other energies carry near the solution, and Newton would
+            // converge only linearly (a folded towel under a robot: by 0.69 per iteration).
+            let next_definite = if definite {
+                alpha < 1.0 || residual >= exact_barriers_below_n
+            } else {
+                alpha < 0.25
+            };
+            if next_definite != definite {
+                definite = next_definite;
+                if !definite && settings.projection == Projection::OnDemand {
+                    // An indefinite Hessian far from here says little about here.
+                    project = false;
+                }
+                for t in terms.iter_mut() {
+                    t.use_definite_hessian(definite);
+                }
+            }
         }
         if std::env::var_os("STARK_NEWTON_TRACE").is_some() {
             // Diagnostics: one line per iteration on stderr (the residual, the accepted step
             // fraction, the Hessians used, the DOF block of the step's largest entry).
             eprintln!(
-                "it {iteration:2} res {residual:.3e} alpha {alpha:.3e} maj {majorizer} ls {} cg {} step {:.3e} at {}",
+                "it {iteration:2} res {residual:.3e} alpha {alpha:.3e} maj {majorizer} def {definite} proj {project} ls {} cg {} step {:.3e} at {}",
                 report.line_search_evaluations,
                 report.cg_iterations,
                 norm_inf(&ws.step),

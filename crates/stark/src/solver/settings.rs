@@ -52,14 +52,18 @@ pub struct NewtonSettings {
     pub armijo: f64,
     /// Largest number of step halvings in the line search (default: 30).
     pub max_line_search_iterations: usize,
-    /// When element Hessians are projected (default: on demand). Terms whose Hessians are always
-    /// indefinite near their active set (contact barriers) project regardless.
+    /// When element Hessians are projected (default: on demand: after a linear solve found the
+    /// exact Hessian indefinite, for the rest of the step or until the next switch to exact
+    /// Hessians, see below).
     pub projection: Projection,
-    /// Far from the solution, assemble the majorising stand-ins that terms offer for their
-    /// Hessians (sliding friction: curvature along the slip too, so that a step cannot jump
-    /// across a solution that sticks), and the exact Hessians once a step was taken in full;
-    /// back to the stand-ins after an exact step had to be cut below a quarter (default: true).
-    /// Off: exact Hessians throughout.
+    /// Far from the solution, assemble the stand-ins that terms offer for their Hessians
+    /// (sliding friction: a majoriser with curvature along the slip too, so that a step cannot
+    /// jump across a solution that sticks; contact barriers: their positive semi-definite form),
+    /// and the exact Hessians once a step was taken in full (projection on demand starts over);
+    /// back to the stand-ins after an exact step had to be cut below a quarter. Where the exact
+    /// barrier Hessians make the total indefinite, their definite form until the residual fell
+    /// tenfold (default: true). Off: exact Hessians throughout, the barriers' definite form and
+    /// then projection on demand.
     pub majorizer_far_from_solution: bool,
 }
 
