@@ -1555,6 +1555,15 @@ mod tests {
     /// Run the contact term's `before_step` at the current state and return the validity of the
     /// positions `x` through `is_valid_state`.
     fn valid_at(sim: &mut Simulation, x: &[Vector3<f64>]) -> bool {
+        at_rest(sim, |contact, state| {
+            contact.before_step(state);
+            let trial = EvalState { x, ..*state };
+            contact.is_valid_state(&trial)
+        })
+    }
+
+    /// Call `f` with the contact term and the state of the simulation at rest (dt = 0.01 s).
+    fn at_rest<R>(sim: &mut Simulation, f: impl FnOnce(&mut super::Contact, &EvalState) -> R) -> R {
         let zeros = vec![Vector3::zeros(); dof_blocks(&sim.nodes, &sim.bodies)];
         let poses: Vec<BodyPose> = (0..sim.bodies.len())
             .map(|b| BodyPose::at_rest(sim.bodies.position[b], &sim.bodies.orientation[b], 0.01))
@@ -1570,9 +1579,7 @@ mod tests {
             bodies: &sim.bodies,
             poses: &poses,
         };
-        sim.contact.before_step(&state);
-        let trial = EvalState { x, ..state };
-        sim.contact.is_valid_state(&trial)
+        f(&mut sim.contact, &state)
     }
 
     #[test]
@@ -1643,50 +1650,36 @@ mod tests {
         sim.contact.initialize_stiffness(&masses_kg, 0.01, 9.81);
         let x = sim.nodes.x.clone();
         assert!(valid_at(&mut sim, &x));
-        let zeros = vec![Vector3::zeros(); dof_blocks(&sim.nodes, &sim.bodies)];
-        let nodes = sim.nodes.clone();
-        let state = EvalState {
-            dt: 0.01,
-            time: 0.01,
-            gravity: Vector3::zeros(),
-            nodes: &nodes,
-            v: &zeros,
-            x: &nodes.x,
-            bodies: &sim.bodies,
-            poses: &[],
-        };
-        sim.contact.prepare_evaluation(&state);
-        // The corners' point–point pair, and the edges that meet there (edge–edge, the same
-        // closest points).
-        let pairs = sim.contact.pairs().len();
-        assert!(pairs >= 1);
-        let smallest_eigenvalue = |contact: &mut super::Contact, e: usize, definite: bool| {
-            contact.use_definite_hessian(definite);
-            let mut out = vec![0.0; crate::energy::term::element_stride(4)];
-            contact.evaluate_element(e, &state, EvalMode::ExactHessian, &mut out);
-            // The 12×12 Hessian from its 3×3 blocks.
-            let mut h = [0.0; 144];
-            for (a, b, i, j) in hessian_block_entries() {
-                h[(3 * a + i) * 12 + 3 * b + j] = out[13 + 9 * (a * 4 + b) + 3 * i + j];
+        at_rest(&mut sim, |contact, state| {
+            contact.prepare_evaluation(state);
+            // The corners' point–point pair, and the edges that meet there (edge–edge, the same
+            // closest points).
+            let pairs = contact.pairs().len();
+            assert!(pairs >= 1);
+            let mut smallest_eigenvalue = |e: usize, definite: bool| {
+                contact.use_definite_hessian(definite);
+                let mut out = vec![0.0; crate::energy::term::element_stride(4)];
+                contact.evaluate_element(e, state, EvalMode::ExactHessian, &mut out);
+                // The 12×12 Hessian from its 3×3 blocks.
+                let mut h = [0.0; 144];
+                for (a, b, i, j) in hessian_block_entries() {
+                    h[(3 * a + i) * 12 + 3 * b + j] = out[13 + 9 * (a * 4 + b) + 3 * i + j];
+                }
+                let (mut w, mut v) = ([0.0; 12], [0.0; 144]);
+                symmetric_eigen(&h, 12, &mut w, &mut v);
+                let scale = w.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+                w.iter().copied().fold(f64::INFINITY, f64::min) / scale
+            };
+            for e in 0..pairs {
+                let l = smallest_eigenvalue(e, true);
+                assert!(l > -1e-12, "definite form: pair {e}: {l}");
             }
-            let (mut w, mut v) = ([0.0; 12], [0.0; 144]);
-            symmetric_eigen(&h, 12, &mut w, &mut v);
-            let scale = w.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-            w.iter().copied().fold(f64::INFINITY, f64::min) / scale
-        };
-        for e in 0..pairs {
-            let l = smallest_eigenvalue(&mut sim.contact, e, true);
+            let exact = (0..pairs).map(|e| smallest_eigenvalue(e, false));
             assert!(
-                l > -1e-12,
-                "definite form: pair {e} {:?} {l}",
-                sim.contact.pairs()[e].kind
+                exact.fold(f64::INFINITY, f64::min) < -1e-3,
+                "exact: negative curvature across"
             );
-        }
-        let exact = (0..pairs).map(|e| smallest_eigenvalue(&mut sim.contact, e, false));
-        assert!(
-            exact.fold(f64::INFINITY, f64::min) < -1e-3,
-            "exact: negative curvature across"
-        );
+        });
     }
 
     /// (block row, block column, row, column) of the 4×4 blocks of 3×3 in an element buffer.
