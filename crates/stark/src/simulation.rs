@@ -2,7 +2,7 @@
 
 use crate::contact::{Contact, ContactStats};
 use crate::deformables::{Deformables, NodeSetHandle};
-use crate::energy::kinematics::BodyPose;
+use crate::energy::kinematics::{apply_kinematic_map, BodyPose};
 use crate::energy::user_energy::{self, UserEnergyTerm};
 use crate::energy::{EnergyTerm, Node, StepCheck};
 use crate::error::{Result, StarkError};
@@ -10,7 +10,7 @@ use crate::io::output::Output;
 use crate::rigidbodies::{commit_bodies, RigidBodies};
 use crate::solver::newton::{self, ConvergedBy, NewtonWorkspace, PhaseTimes, StepProblem};
 use crate::solver::Settings;
-use crate::state::{apply_kinematic_map, dof_blocks, BodyArrays, EvalState, NodeArrays, NO_BODY};
+use crate::state::{dof_blocks, BodyArrays, EvalState, NodeArrays, NO_BODY};
 use nalgebra::Vector3;
 use serde::Serialize;
 use std::time::Instant;

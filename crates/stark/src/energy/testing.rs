@@ -2,12 +2,12 @@
 //! users writing their own potentials.
 
 use super::dual::HyperDual;
-use super::kinematics::BodyPose;
+use super::kinematics::{apply_kinematic_map, BodyPose};
 use super::potential::{dual_derivatives, FastDerivatives, Potential, Stencil};
 use super::scalar::Scalar;
 use super::tensor::Vec3;
 use super::term::{element_stride, EnergyTerm, EvalMode, NO_DOF};
-use crate::state::{apply_kinematic_map, BodyArrays, EvalState, NodeArrays, NO_BODY};
+use crate::state::{BodyArrays, EvalState, NodeArrays, NO_BODY};
 use nalgebra::Vector3;
 
 /// A self-contained state for evaluating energies in tests.

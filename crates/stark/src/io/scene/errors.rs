@@ -1,54 +1,15 @@
-//! [`SceneError`] and how an error finds its place: a path into the document ([`At`]), the untyped
+//! How a [`SceneError`] finds its place: a path into the document ([`At`]), the untyped
 //! document for spans and entry labels ([`Tree`]), and the context ([`Ctx`]) that turns a path and
 //! a message into an error naming the file, line, column, entry and field.
 
-use super::joints::JointEntry;
+pub use crate::error::SceneError;
 use crate::error::StarkError;
-use crate::rigidbodies::joints::JointKind;
-use std::fmt;
 use std::fmt::Write as _;
 use std::ops::Range;
 use toml::de::{DeTable, DeValue};
 
 /// What the scene's builders return.
 pub(super) type Res<T> = std::result::Result<T, SceneError>;
-
-/// An invalid scene file: where the problem is and what it is.
-#[derive(Clone, Debug, PartialEq)]
-pub struct SceneError {
-    /// The file as given to the loader.
-    pub file: String,
-    /// 1-based line, where known.
-    pub line: Option<usize>,
-    /// 1-based column in characters, where known.
-    pub column: Option<usize>,
-    /// The entry and field, e.g. `surface 'cloth' material.strain` (empty for the whole file).
-    pub path: String,
-    /// What is wrong.
-    pub message: String,
-}
-
-impl fmt::Display for SceneError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}", self.file)?;
-        if let Some(line) = self.line {
-            write!(f, ":{line}")?;
-            if let Some(column) = self.column {
-                write!(f, ":{column}")?;
-            }
-        }
-        write!(f, ": ")?;
-        if self.path.is_empty() {
-            write!(f, "{}", self.message)
-        } else if let Some((head, tail)) = self.message.split_once(", expected") {
-            write!(f, "{head} in {}, expected{tail}", self.path)
-        } else {
-            write!(f, "{} in {}", self.message, self.path)
-        }
-    }
-}
-
-impl std::error::Error for SceneError {}
 
 /// One step of a path into the document.
 #[derive(Clone, Debug, PartialEq)]
@@ -105,7 +66,7 @@ pub(super) enum Tree<'a> {
 }
 
 impl Tree<'_> {
-    fn item_str(&self, kind: &str, index: usize, key: &str) -> Option<String> {
+    pub(super) fn item_str(&self, kind: &str, index: usize, key: &str) -> Option<String> {
         match self {
             Tree::Toml(doc) => doc
                 .get(kind)?
@@ -350,8 +311,14 @@ impl Ctx<'_> {
         }
     }
 
-    /// A deserialisation error of the TOML document, located through its span.
-    pub(super) fn toml_error(&self, e: &toml::de::Error) -> SceneError {
+    /// A deserialisation error of the TOML document, located through its span. An error in a
+    /// `[[joint]]`, whose span is the whole entry, is traced to its field by `joint_culprit`
+    /// (`(index, message)` to `(key, message)`).
+    pub(super) fn toml_error(
+        &self,
+        e: &toml::de::Error,
+        joint_culprit: impl Fn(&Ctx, usize, &str) -> Option<(String, String)>,
+    ) -> SceneError {
         let mut path = Vec::new();
         let mut line_column = None;
         if let Some(span) = e.span() {
@@ -365,7 +332,7 @@ impl Ctx<'_> {
         let mut message = e.message().trim_end().to_string();
         if let [Seg::Key(kind), Seg::Index(i)] = &path[..] {
             if kind == "joint" {
-                if let Some((key, m)) = self.joint_culprit(*i, &message) {
+                if let Some((key, m)) = joint_culprit(self, *i, &message) {
                     // At the key, or at the value of an unknown `type`.
                     let at = At(vec![Seg::Key("joint".into()), Seg::Index(*i), Seg::Key(key.clone())]);
                     let span = match key.as_str() {
@@ -385,59 +352,6 @@ impl Ctx<'_> {
             err.column = Some(column);
         }
         err
-    }
-
-    /// The field of `[[joint]]` `index` that a deserialisation error is about, and a message
-    /// naming it. A joint's type and fields are a flattened, internally tagged `JointKind`,
-    /// deserialised from a buffer that has lost the fields' places: unknown and missing fields
-    /// are named in the message; any other error is traced to the field whose removal changes
-    /// it (the entry is deserialised again without each field in turn).
-    fn joint_culprit(&self, index: usize, message: &str) -> Option<(String, String)> {
-        let type_name = self.tree.item_str("joint", index, "type");
-        let ticked =
-            |m: &str, prefix: &str| -> Option<String> { m.strip_prefix(prefix)?.split('`').next().map(str::to_string) };
-        let fields = |t: &str| JointKind::fields_of(t).unwrap_or_default();
-        let list = |v: &[String]| v.iter().map(|f| format!("`{f}`")).collect::<Vec<_>>().join(", ");
-        if let Some(field) = ticked(message, "unknown field `") {
-            let t = type_name.unwrap_or_default();
-            let mut takes = fields(&t);
-            let driven = takes.iter().any(|f| f.starts_with("target_"));
-            takes.extend(["stiffness", "tolerance_m", "tolerance_deg"].map(String::from));
-            if driven {
-                takes.push("target_schedule".into());
-            }
-            let elsewhere = JointKind::type_names().iter().any(|o| fields(o).contains(&field));
-            let m = if elsewhere {
-                format!("`{field}` does not apply to a {t} joint, which takes {}", list(&takes))
-            } else {
-                format!("unknown field `{field}`, expected one of {}", list(&takes))
-            };
-            return Some((field, m));
-        }
-        if message.starts_with("unknown variant `") {
-            return Some(("type".into(), message.to_string()));
-        }
-        if let Some(field) = ticked(message, "missing field `") {
-            if field == "type" {
-                return None;
-            }
-            let t = type_name.unwrap_or_default();
-            let m = format!("a {t} joint needs `{field}` (it takes {})", list(&fields(&t)));
-            return Some(("type".into(), m));
-        }
-        // Deserialise the entry again without each of its fields.
-        let doc: toml::Table = toml::from_str(self.text).ok()?;
-        let entry = doc.get("joint")?.as_array()?.get(index)?.as_table()?.clone();
-        let fails_alike = |t: toml::Table| match toml::Value::Table(t).try_into::<JointEntry>() {
-            Ok(_) => false,
-            Err(e) => e.message().trim_end() == message,
-        };
-        let key = entry.keys().find(|k| {
-            let mut without = entry.clone();
-            without.remove(*k);
-            !fails_alike(without)
-        })?;
-        Some((key.clone(), format!("`{key}`: {message}")))
     }
 
     /// A library error raised while building the entry at `at`.

@@ -203,3 +203,56 @@ pub(super) fn joint_name(ctx: &Ctx, at: &At, e: &JointEntry, joints: &[JointHand
         }
     }
 }
+
+/// The field of `[[joint]]` `index` that a deserialisation error is about, and a message
+/// naming it. A joint's type and fields are a flattened, internally tagged `JointKind`,
+/// deserialised from a buffer that has lost the fields' places: unknown and missing fields
+/// are named in the message; any other error is traced to the field whose removal changes
+/// it (the entry is deserialised again without each field in turn).
+pub(super) fn joint_culprit(ctx: &Ctx, index: usize, message: &str) -> Option<(String, String)> {
+    let type_name = ctx.tree.item_str("joint", index, "type");
+    let ticked =
+        |m: &str, prefix: &str| -> Option<String> { m.strip_prefix(prefix)?.split('`').next().map(str::to_string) };
+    let fields = |t: &str| JointKind::fields_of(t).unwrap_or_default();
+    let list = |v: &[String]| v.iter().map(|f| format!("`{f}`")).collect::<Vec<_>>().join(", ");
+    if let Some(field) = ticked(message, "unknown field `") {
+        let t = type_name.unwrap_or_default();
+        let mut takes = fields(&t);
+        let driven = takes.iter().any(|f| f.starts_with("target_"));
+        takes.extend(["stiffness", "tolerance_m", "tolerance_deg"].map(String::from));
+        if driven {
+            takes.push("target_schedule".into());
+        }
+        let elsewhere = JointKind::type_names().iter().any(|o| fields(o).contains(&field));
+        let m = if elsewhere {
+            format!("`{field}` does not apply to a {t} joint, which takes {}", list(&takes))
+        } else {
+            format!("unknown field `{field}`, expected one of {}", list(&takes))
+        };
+        return Some((field, m));
+    }
+    if message.starts_with("unknown variant `") {
+        return Some(("type".into(), message.to_string()));
+    }
+    if let Some(field) = ticked(message, "missing field `") {
+        if field == "type" {
+            return None;
+        }
+        let t = type_name.unwrap_or_default();
+        let m = format!("a {t} joint needs `{field}` (it takes {})", list(&fields(&t)));
+        return Some(("type".into(), m));
+    }
+    // Deserialise the entry again without each of its fields.
+    let doc: toml::Table = toml::from_str(ctx.text).ok()?;
+    let entry = doc.get("joint")?.as_array()?.get(index)?.as_table()?.clone();
+    let fails_alike = |t: toml::Table| match toml::Value::Table(t).try_into::<JointEntry>() {
+        Ok(_) => false,
+        Err(e) => e.message().trim_end() == message,
+    };
+    let key = entry.keys().find(|k| {
+        let mut without = entry.clone();
+        without.remove(*k);
+        !fails_alike(without)
+    })?;
+    Some((key.clone(), format!("`{key}`: {message}")))
+}

@@ -267,7 +267,7 @@ pub fn parse_scene_with(
             tree: Tree::Toml(doc.get_ref()),
             root_span: Some(doc.span()),
         };
-        let file: build::SceneFile = toml::from_str(text).map_err(|e| ctx.toml_error(&e))?;
+        let file: build::SceneFile = toml::from_str(text).map_err(|e| ctx.toml_error(&e, joints::joint_culprit))?;
         Ok(build::build(file, &ctx, base_dir, configure)?)
     }
 }

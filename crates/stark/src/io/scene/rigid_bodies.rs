@@ -11,7 +11,6 @@ use super::geometry::{
     check_positive, finite, inline_shape, mesh_path, one_geometry, orientation, shape_error, BoxGenerator,
     CapsuleGenerator, CylinderGenerator, Geometry, Rotate, SphereGenerator, TorusGenerator,
 };
-use super::spawn::SpawnEntry;
 use crate::contact::ContactHandle;
 use crate::deformables::NodeSetHandle;
 use crate::error::StarkError;
@@ -77,6 +76,24 @@ pub(super) struct RigidBodyEntry {
     pub(super) motion: Option<Motion>,
     pub(super) keyframes: Option<Vec<Keyframe>>,
     pub(super) spawn: Option<SpawnEntry>,
+}
+
+/// `spawn = { ... }` of a `[[rigid_body]]`: copies added during the run (`spawn.rs`).
+#[derive(Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct SpawnEntry {
+    /// Time of the first copy, s.
+    pub(super) start_s: f64,
+    /// Time between copies, s (default: 0, all at once).
+    #[serde(default)]
+    pub(super) every_s: f64,
+    /// Number of copies.
+    pub(super) count: usize,
+    /// Where the copies' centres of mass go, in turn, m (default: the body's `position_m`).
+    pub(super) positions_m: Option<Vec<[f64; 3]>>,
+    /// Lower each copy straight down until it is this far above what it would land on, m
+    /// (default: place it where given).
+    pub(super) drop_to_gap_m: Option<f64>,
 }
 
 /// A body's shape in its body frame (centre of mass at the origin) and its mass properties.

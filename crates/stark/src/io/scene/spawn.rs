@@ -9,26 +9,7 @@ use crate::contact::ContactHandle;
 use crate::rigidbodies::RigidBodyParams;
 use crate::simulation::Simulation;
 use nalgebra::{UnitQuaternion, Vector3};
-use serde::Deserialize;
 use std::path::Path;
-
-/// `spawn = { ... }` of a `[[rigid_body]]`.
-#[derive(Clone, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(super) struct SpawnEntry {
-    /// Time of the first copy, s.
-    start_s: f64,
-    /// Time between copies, s (default: 0, all at once).
-    #[serde(default)]
-    every_s: f64,
-    /// Number of copies.
-    pub(super) count: usize,
-    /// Where the copies' centres of mass go, in turn, m (default: the body's `position_m`).
-    positions_m: Option<Vec<[f64; 3]>>,
-    /// Lower each copy straight down until it is this far above what it would land on, m
-    /// (default: place it where given).
-    drop_to_gap_m: Option<f64>,
-}
 
 /// Whom a spawned body's copies have friction with (from `[[friction]]` entries).
 #[derive(Clone)]
