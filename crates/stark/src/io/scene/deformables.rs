@@ -146,7 +146,7 @@ pub(super) fn build_surface(
         }
         SurfaceSource::Grid(g) => g.mesh(ctx, at),
         SurfaceSource::Mesh(file) => {
-            let m = load_triangle_mesh(&mesh_path(base_dir, file))
+            let m = load_triangle_mesh(mesh_path(base_dir, file))
                 .map_err(|err| ctx.err(&at.key("mesh"), err.to_string()))?;
             Ok((m.vertices, m.elements))
         }
@@ -188,7 +188,7 @@ pub(super) fn build_volume(
             Ok((m.vertices, m.elements))
         }
         VolumeSource::Mesh(file) => {
-            let m = load_tet_mesh(&mesh_path(base_dir, file)).map_err(|err| {
+            let m = load_tet_mesh(mesh_path(base_dir, file)).map_err(|err| {
                 ctx.err(
                     &at.key("mesh"),
                     format!("{err} (a volume needs a tetrahedral mesh: .vtk or .msh)"),

@@ -10,6 +10,9 @@ use nalgebra::{Quaternion, Unit, UnitQuaternion, Vector3};
 use serde::Deserialize;
 use std::path::Path;
 
+/// Vertices and elements of a mesh.
+pub(super) type MeshData<E> = (Vec<Vector3<f64>>, Vec<E>);
+
 /// The one geometry an entry gives.
 pub(super) enum Geometry<'e, S, E> {
     /// A generator table or a mesh file, under the entry's `key`; `S` is the entry's own enum of
@@ -33,10 +36,7 @@ impl<S, E: Clone> Geometry<'_, S, E> {
     }
 
     /// The vertices and elements: an inline mesh as given, a source through `mesh_of`.
-    pub(super) fn into_mesh(
-        self,
-        mesh_of: impl FnOnce(S) -> Res<(Vec<Vector3<f64>>, Vec<E>)>,
-    ) -> Res<(Vec<Vector3<f64>>, Vec<E>)> {
+    pub(super) fn into_mesh(self, mesh_of: impl FnOnce(S) -> Res<MeshData<E>>) -> Res<MeshData<E>> {
         match self {
             Geometry::Source { source, .. } => mesh_of(source),
             Geometry::Inline { vertices_m, elements } => Ok((vectors(vertices_m), elements.to_vec())),
@@ -164,7 +164,7 @@ pub(super) struct SurfaceGrid {
 
 impl SurfaceGrid {
     /// Its vertices and triangles, the sizes checked (`at` is the entry).
-    pub(super) fn mesh(&self, ctx: &Ctx, at: &At) -> Res<(Vec<Vector3<f64>>, Vec<[usize; 3]>)> {
+    pub(super) fn mesh(&self, ctx: &Ctx, at: &At) -> Res<MeshData<[usize; 3]>> {
         check_grid(ctx, &at.key("grid"), &self.size_m, &self.quads, "quads")?;
         let m = crate::presets::meshes::triangle_grid([0.0, 0.0], self.size_m, self.quads, 0.0);
         Ok((m.vertices, m.elements))

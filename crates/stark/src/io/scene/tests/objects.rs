@@ -371,6 +371,8 @@ to_m_s2 = [0.0, 0.0, -1.0]
     assert!((sim.gravity().z - expected).abs() < 1e-12);
 }
 
+/// A sheet pierced by a blade (an obstacle), three more obstacles, friction and a disabled
+/// collision.
 const OBSTACLES: &str = r#"
 duration_s = 1.0
 [settings]

@@ -483,8 +483,6 @@ fn json_rigid_scenes_parse() {
     assert!(e.to_string().contains("unknown variant `distanc`"), "{e}");
 }
 
-/// `scenes/rb_pendulum_chain.toml` built with the Rust API.
-
 const SPAWN_SCENE: &str = r#"
 duration_s = 0.4
 [settings]

@@ -150,8 +150,7 @@ fn cloth_on_sphere_scene_matches_the_builtin() {
     assert_eq!(bits(&from_file.nodes.x), bits(&builtin.nodes.x));
 }
 
-/// A sheet pierced by a blade (an obstacle), three more obstacles, friction and a disabled
-
+/// `scenes/rb_pendulum_chain.toml` built with the Rust API.
 fn pendulum_chain_in_rust(settings: Settings) -> Simulation {
     let mut sim = Simulation::new(settings).unwrap();
     let size = Vector3::new(0.2, 0.03, 0.03);
