@@ -237,21 +237,18 @@ fn rest_poses(bodies: &BodyArrays, dt: f64) -> Vec<BodyPose> {
         .collect()
 }
 
-/// The energy terms of all models, borrowed apart from the simulation's state so that they can
-/// evaluate it.
-fn model_terms<'a>(
-    deformables: &'a mut Deformables,
-    rigid_bodies: &'a mut RigidBodies,
-    contact: &'a mut Contact,
-    custom: &'a mut [Box<dyn EnergyTerm>],
-    user_energies: &'a mut [Box<dyn UserEnergyTerm>],
-) -> Vec<&'a mut dyn EnergyTerm> {
-    let mut terms = deformables.terms_mut();
-    terms.extend(rigid_bodies.terms_mut());
-    terms.push(contact);
-    terms.extend(custom.iter_mut().map(|t| &mut **t as &mut dyn EnergyTerm));
-    terms.extend(user_energies.iter_mut().map(|t| &mut **t as &mut dyn EnergyTerm));
-    terms
+/// The simulation borrowed apart: the energy terms of all models, and the state, scratch
+/// buffers and workspaces they are evaluated with (each phase of a step takes what it needs).
+struct StepParts<'a> {
+    terms: Vec<&'a mut dyn EnergyTerm>,
+    settings: &'a Settings,
+    nodes: &'a NodeArrays,
+    bodies: &'a BodyArrays,
+    velocities: &'a mut Vec<Vector3<f64>>,
+    scratch_x: &'a mut Vec<Vector3<f64>>,
+    scratch_poses: &'a mut Vec<BodyPose>,
+    newton: &'a mut NewtonWorkspace,
+    pool: &'a Option<rayon::ThreadPool>,
 }
 
 impl Simulation {
@@ -547,16 +544,43 @@ impl Simulation {
         Ok(())
     }
 
-    fn terms_mut(&mut self) -> Vec<&mut dyn EnergyTerm> {
+    fn parts(&mut self) -> StepParts<'_> {
         let Simulation {
+            settings,
+            nodes,
+            bodies,
             deformables,
             rigid_bodies,
             contact,
             custom,
             user_energies,
+            newton,
+            velocities,
+            scratch_x,
+            scratch_poses,
+            pool,
             ..
         } = self;
-        model_terms(deformables, rigid_bodies, contact, custom, user_energies)
+        let mut terms = deformables.terms_mut();
+        terms.extend(rigid_bodies.terms_mut());
+        terms.push(contact);
+        terms.extend(custom.iter_mut().map(|t| &mut **t as &mut dyn EnergyTerm));
+        terms.extend(user_energies.iter_mut().map(|t| &mut **t as &mut dyn EnergyTerm));
+        StepParts {
+            terms,
+            settings,
+            nodes,
+            bodies,
+            velocities,
+            scratch_x,
+            scratch_poses,
+            newton,
+            pool,
+        }
+    }
+
+    fn terms_mut(&mut self) -> Vec<&mut dyn EnergyTerm> {
+        self.parts().terms
     }
 
     fn run_events(&mut self, t_end: f64) -> Result<()> {
@@ -684,20 +708,16 @@ impl Simulation {
     /// Lag the terms' quantities at the start of the step and solve for the end-of-step
     /// velocities with Newton, starting from those the last attempt left in `velocities`.
     fn solve_attempt(&mut self, attempt: &Attempt) -> std::result::Result<NewtonReport, NewtonFailure> {
-        let Simulation {
+        let StepParts {
+            mut terms,
             settings,
             nodes,
             bodies,
-            deformables,
-            rigid_bodies,
-            contact,
-            custom,
-            user_energies,
-            newton,
             velocities,
+            newton,
             pool,
             ..
-        } = self;
+        } = self.parts();
         let problem = StepProblem {
             nodes,
             bodies,
@@ -705,7 +725,6 @@ impl Simulation {
             time: attempt.t_end,
             gravity: attempt.gravity,
         };
-        let mut terms = model_terms(deformables, rigid_bodies, contact, custom, user_energies);
         // Everything parallel in the step (lagged quantities, contact detection, the solve) runs
         // in the simulation's pool, so `threads` bounds it.
         let mut step = || {
@@ -730,23 +749,18 @@ impl Simulation {
     /// poses) and ask every term whether the step is within its tolerances; returns the reasons
     /// to retry it (none when it passes).
     fn check_attempt(&mut self, attempt: &Attempt) -> Vec<String> {
-        let Simulation {
-            nodes,
-            bodies,
-            deformables,
-            rigid_bodies,
-            contact,
-            custom,
-            user_energies,
-            velocities,
-            scratch_x,
-            scratch_poses,
-            ..
-        } = self;
-        apply_kinematic_map(nodes, bodies, velocities, attempt.dt, scratch_x, scratch_poses);
-        let state = attempt.state(nodes, bodies, velocities, scratch_x, scratch_poses);
+        let p = self.parts();
+        apply_kinematic_map(
+            p.nodes,
+            p.bodies,
+            p.velocities,
+            attempt.dt,
+            p.scratch_x,
+            p.scratch_poses,
+        );
+        let state = attempt.state(p.nodes, p.bodies, p.velocities, p.scratch_x, p.scratch_poses);
         let mut retry = Vec::new();
-        for t in model_terms(deformables, rigid_bodies, contact, custom, user_energies) {
+        for t in p.terms {
             if let StepCheck::Retry(msg) = t.check_converged_step(&state) {
                 retry.push(msg);
             }
@@ -770,20 +784,10 @@ impl Simulation {
         }
         commit_bodies(&mut self.bodies, &self.velocities, n_nodes, dt);
         self.time = attempt.t_end;
-        let Simulation {
-            nodes,
-            bodies,
-            deformables,
-            rigid_bodies,
-            contact,
-            custom,
-            user_energies,
-            velocities,
-            ..
-        } = self;
-        let poses = rest_poses(bodies, dt);
-        let state = attempt.state(nodes, bodies, velocities, &nodes.x, &poses);
-        for t in model_terms(deformables, rigid_bodies, contact, custom, user_energies) {
+        let p = self.parts();
+        let poses = rest_poses(p.bodies, dt);
+        let state = attempt.state(p.nodes, p.bodies, p.velocities, &p.nodes.x, &poses);
+        for t in p.terms {
             t.after_step(&state);
         }
     }
