@@ -300,3 +300,11 @@ pub fn to_python<'py>(py: Python<'py>, value: &impl serde::Serialize) -> PyResul
     let text = serde_json::to_string(value).map_err(|e| stark_err(format!("cannot convert to Python: {e}")))?;
     py.import("json")?.call_method1("loads", (PyString::new(py, &text),))
 }
+
+/// A pose from optional arguments: the origin and no rotation by default.
+pub(crate) fn pose(position_m: Option<V3>, orientation: Option<Rot>) -> (Vector3<f64>, UnitQuaternion<f64>) {
+    (
+        position_m.map(|p| p.0).unwrap_or_else(Vector3::zeros),
+        orientation.map(|q| q.0).unwrap_or_else(UnitQuaternion::identity),
+    )
+}

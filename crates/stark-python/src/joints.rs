@@ -4,11 +4,10 @@
 //!
 //! Argument names are the library's (units in the names). Body `a` may be `None`: the world.
 
-use crate::convert::{to_python, Elements, Indices, Points, Rot, V3};
+use crate::convert::{pose, to_python, Elements, Indices, Points, Rot, V3};
 use crate::handles::*;
-use crate::params::{self, Mirror};
-use crate::simulation::{attachment_params_arg, Simulation};
-use nalgebra::{UnitQuaternion, Vector3};
+use crate::params::{self, attachment_params_arg, Mirror};
+use crate::simulation::Simulation;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use stark::rigidbodies::joints::{JointHandle, JointKind, JointReadout, Primitive, DEFAULT_CONTROLLER_DELAY};
@@ -180,14 +179,6 @@ impl Simulation {
             body,
         }
     }
-}
-
-/// A pose from optional arguments: the origin and no rotation by default.
-pub(crate) fn pose(position_m: Option<V3>, orientation: Option<Rot>) -> (Vector3<f64>, UnitQuaternion<f64>) {
-    (
-        position_m.map(|p| p.0).unwrap_or_else(Vector3::zeros),
-        orientation.map(|q| q.0).unwrap_or_else(UnitQuaternion::identity),
-    )
 }
 
 #[pymethods]

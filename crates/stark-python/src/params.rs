@@ -588,6 +588,17 @@ pub fn settings_from(py: Python<'_>, s: Option<&Bound<'_, Settings>>) -> PyResul
     }
 }
 
+/// The attachment parameters of an optional `params` argument (the defaults when it is omitted).
+pub(crate) fn attachment_params_arg(
+    py: Python<'_>,
+    p: Option<&Bound<'_, AttachmentParams>>,
+) -> PyResult<stark::deformables::AttachmentParams> {
+    match p {
+        Some(p) => p.borrow().to_rust(py),
+        None => Ok(Default::default()),
+    }
+}
+
 /// Register the classes.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Settings>()?;

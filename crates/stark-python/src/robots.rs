@@ -1,9 +1,9 @@
 //! Robots from URDF files: `Simulation.add_robot`, mirroring the library's `robots` module and
 //! the scene files' `[[robot]]`.
 
-use crate::convert::{stark_err, Rot, V3};
+use crate::convert::{pose, stark_err, Rot, V3};
 use crate::handles::RigidBody;
-use crate::joints::{pose, Joint};
+use crate::joints::Joint;
 use crate::simulation::Simulation;
 use pyo3::prelude::*;
 use std::collections::BTreeMap;

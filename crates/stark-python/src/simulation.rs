@@ -13,12 +13,11 @@
 //! library becomes a `StarkError`; if it happened mid-step the simulation is marked unusable.
 
 use crate::convert::{
-    floats_out, guarded, m3_out, points_out, quat_out, stark_err, to_py_err, to_python, v3_out, Elements, Floats,
+    floats_out, guarded, m3_out, points_out, pose, quat_out, stark_err, to_py_err, to_python, v3_out, Elements, Floats,
     Indices, Points, Rot, M3, V3,
 };
 use crate::handles::*;
-use crate::joints::pose;
-use crate::params::{self, Mirror};
+use crate::params::{self, attachment_params_arg, Mirror};
 use crate::rigid::MassProperties;
 use nalgebra::{UnitQuaternion, Vector3};
 use pyo3::exceptions::PyTypeError;
@@ -1560,16 +1559,6 @@ fn prescribed_params(
     py: Python<'_>,
     p: Option<&Bound<'_, params::PrescribedParams>>,
 ) -> PyResult<stark::deformables::PrescribedParams> {
-    match p {
-        Some(p) => p.borrow().to_rust(py),
-        None => Ok(Default::default()),
-    }
-}
-
-pub(crate) fn attachment_params_arg(
-    py: Python<'_>,
-    p: Option<&Bound<'_, params::AttachmentParams>>,
-) -> PyResult<stark::deformables::AttachmentParams> {
     match p {
         Some(p) => p.borrow().to_rust(py),
         None => Ok(Default::default()),

@@ -54,16 +54,17 @@ pub enum StarkError {
     /// Invalid input that is not a single parameter.
     #[error("{0}")]
     InvalidInput(String),
-    /// A mesh file could not be read.
+    /// A mesh file could not be read. The loader's error (`io::MeshFileError`) is boxed, so that
+    /// this ground floor does not depend on the loaders.
     #[error(transparent)]
-    Mesh(#[from] crate::io::MeshFileError),
+    Mesh(Box<dyn std::error::Error + Send + Sync>),
     /// A scene file is invalid.
     #[error("{0}")]
     Scene(String),
     /// A scene file is invalid: the error names the file, the line and column where known, the
     /// entry and the field.
     #[error(transparent)]
-    SceneFile(#[from] crate::io::scene::SceneError),
+    SceneFile(#[from] SceneError),
     /// Writing output failed.
     #[error("cannot write '{path}': {source}")]
     Output {
@@ -102,6 +103,44 @@ pub enum StarkError {
         message: String,
     },
 }
+
+/// An invalid scene file: where the problem is and what it is. Plain data, so it lives here
+/// (the scene loader in `io::scene` makes it and re-exports it).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SceneError {
+    /// The file as given to the loader.
+    pub file: String,
+    /// 1-based line, where known.
+    pub line: Option<usize>,
+    /// 1-based column in characters, where known.
+    pub column: Option<usize>,
+    /// The entry and field, e.g. `surface 'cloth' material.strain` (empty for the whole file).
+    pub path: String,
+    /// What is wrong.
+    pub message: String,
+}
+
+impl std::fmt::Display for SceneError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}", self.file)?;
+        if let Some(line) = self.line {
+            write!(f, ":{line}")?;
+            if let Some(column) = self.column {
+                write!(f, ":{column}")?;
+            }
+        }
+        write!(f, ": ")?;
+        if self.path.is_empty() {
+            write!(f, "{}", self.message)
+        } else if let Some((head, tail)) = self.message.split_once(", expected") {
+            write!(f, "{head} in {}, expected{tail}", self.path)
+        } else {
+            write!(f, "{} in {}", self.message, self.path)
+        }
+    }
+}
+
+impl std::error::Error for SceneError {}
 
 /// Result with [`StarkError`].
 pub type Result<T, E = StarkError> = std::result::Result<T, E>;

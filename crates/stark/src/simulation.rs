@@ -2,15 +2,15 @@
 
 use crate::contact::{Contact, ContactStats};
 use crate::deformables::{Deformables, NodeSetHandle};
-use crate::energy::kinematics::BodyPose;
+use crate::energy::kinematics::{apply_kinematic_map, BodyPose};
 use crate::energy::user_energy::{self, UserEnergyTerm};
 use crate::energy::{EnergyTerm, Node, StepCheck};
 use crate::error::{Result, StarkError};
 use crate::io::output::Output;
 use crate::rigidbodies::{commit_bodies, RigidBodies};
-use crate::solver::newton::{self, ConvergedBy, NewtonWorkspace, PhaseTimes, StepProblem};
+use crate::solver::newton::{self, ConvergedBy, NewtonFailure, NewtonReport, NewtonWorkspace, PhaseTimes, StepProblem};
 use crate::solver::Settings;
-use crate::state::{apply_kinematic_map, dof_blocks, BodyArrays, EvalState, NodeArrays, NO_BODY};
+use crate::state::{dof_blocks, BodyArrays, EvalState, NodeArrays, NO_BODY};
 use nalgebra::Vector3;
 use serde::Serialize;
 use std::time::Instant;
@@ -184,6 +184,71 @@ pub struct Simulation {
     /// and the initial frame is not written again.
     resumed_at_step: Option<u64>,
     origin: crate::io::SceneOrigin,
+}
+
+/// One attempt at a time step: its size, end time and gravity, and whether it is a run's
+/// shortened last step.
+struct Attempt {
+    dt: f64,
+    t_end: f64,
+    gravity: Vector3<f64>,
+    shortened: bool,
+}
+
+impl Attempt {
+    /// The state the terms evaluate in this attempt, at DOF velocities `v`, node positions `x`
+    /// and body poses `poses`.
+    fn state<'a>(
+        &self,
+        nodes: &'a NodeArrays,
+        bodies: &'a BodyArrays,
+        v: &'a [Vector3<f64>],
+        x: &'a [Vector3<f64>],
+        poses: &'a [BodyPose],
+    ) -> EvalState<'a> {
+        EvalState {
+            dt: self.dt,
+            time: self.t_end,
+            gravity: self.gravity,
+            nodes,
+            v,
+            x,
+            bodies,
+            poses,
+        }
+    }
+}
+
+/// What the attempts of one step add up to, for its report.
+#[derive(Default)]
+struct StepTally {
+    times: PhaseTimes,
+    hardening_retries: usize,
+    failed_attempts: usize,
+    failure_reasons: Vec<String>,
+    newton_iterations: usize,
+}
+
+/// Every body at rest at its pose in `bodies` (v = ω = 0): the poses the start- and end-of-step
+/// hooks see.
+fn rest_poses(bodies: &BodyArrays, dt: f64) -> Vec<BodyPose> {
+    (0..bodies.len())
+        .map(|b| BodyPose::at_rest(bodies.position[b], &bodies.orientation[b], dt))
+        .collect()
+}
+
+/// The simulation borrowed apart: the energy terms of all models, and the state, scratch
+/// buffers and workspaces they are evaluated with (each phase of a step takes what it needs).
+struct StepParts<'a> {
+    terms: Vec<&'a mut dyn EnergyTerm>,
+    settings: &'a Settings,
+    nodes: &'a NodeArrays,
+    bodies: &'a BodyArrays,
+    velocities: &'a mut Vec<Vector3<f64>>,
+    scratch_x: &'a mut Vec<Vector3<f64>>,
+    scratch_poses: &'a mut Vec<BodyPose>,
+    newton: &'a mut NewtonWorkspace,
+    pool: &'a Option<rayon::ThreadPool>,
 }
 
 impl Simulation {
@@ -479,13 +544,43 @@ impl Simulation {
         Ok(())
     }
 
+    fn parts(&mut self) -> StepParts<'_> {
+        let Simulation {
+            settings,
+            nodes,
+            bodies,
+            deformables,
+            rigid_bodies,
+            contact,
+            custom,
+            user_energies,
+            newton,
+            velocities,
+            scratch_x,
+            scratch_poses,
+            pool,
+            ..
+        } = self;
+        let mut terms = deformables.terms_mut();
+        terms.extend(rigid_bodies.terms_mut());
+        terms.push(contact);
+        terms.extend(custom.iter_mut().map(|t| &mut **t as &mut dyn EnergyTerm));
+        terms.extend(user_energies.iter_mut().map(|t| &mut **t as &mut dyn EnergyTerm));
+        StepParts {
+            terms,
+            settings,
+            nodes,
+            bodies,
+            velocities,
+            scratch_x,
+            scratch_poses,
+            newton,
+            pool,
+        }
+    }
+
     fn terms_mut(&mut self) -> Vec<&mut dyn EnergyTerm> {
-        let mut terms = self.deformables.terms_mut();
-        terms.extend(self.rigid_bodies.terms_mut());
-        terms.push(&mut self.contact);
-        terms.extend(self.custom.iter_mut().map(|t| &mut **t as &mut dyn EnergyTerm));
-        terms.extend(self.user_energies.iter_mut().map(|t| &mut **t as &mut dyn EnergyTerm));
-        terms
+        self.parts().terms
     }
 
     fn run_events(&mut self, t_end: f64) -> Result<()> {
@@ -540,227 +635,212 @@ impl Simulation {
     }
 
     /// Advance by one accepted time step (retrying with a smaller dt or hardened stiffness as
-    /// needed).
+    /// needed). Each attempt is prepared, solved and checked; the first that passes is committed
+    /// and recorded.
     pub fn step(&mut self) -> Result<StepReport> {
         self.start()?;
         let wall = Instant::now();
-        let mut times = PhaseTimes::default();
-        let mut hardening_retries = 0;
-        let mut failed_attempts = 0;
-        let mut failure_reasons = Vec::new();
-        let mut total_newton = 0;
+        let mut tally = StepTally::default();
         loop {
-            // The last step of a run is shortened to land on its end time (a step within rounding
-            // of the remaining time is taken whole, so that runs split at a step boundary repeat
-            // the steps of one run bit for bit).
-            let (dt, t_end, shortened) = match self.step_end_limit {
-                Some(end) if end - self.time < self.dt * (1.0 - 1e-6) => (end - self.time, end, true),
-                _ => (self.dt, self.time + self.dt, false),
-            };
-            self.run_events(t_end)?;
-            self.contact.settings = self.settings.contact.clone();
-            if self.contact.needs_stiffness() {
-                let mut masses = self.deformables.inertia.node_masses(self.nodes.len());
-                RigidBodies::set_node_contact_masses(&self.nodes, &self.bodies, &mut masses);
-                let g = self.gravity().norm();
-                self.contact.initialize_stiffness(&masses, self.settings.time_step_s, g);
-            }
-            let gravity = self.gravity();
-            let newton_settings = self.settings.newton.clone();
-            let mut velocities = std::mem::take(&mut self.velocities);
-            let mut newton_ws = std::mem::take(&mut self.newton);
-            let pool = self.pool.take();
-            let nodes = std::mem::take(&mut self.nodes);
-            let bodies = std::mem::take(&mut self.bodies);
-            let result = {
-                let problem = StepProblem {
-                    nodes: &nodes,
-                    bodies: &bodies,
-                    dt,
-                    time: t_end,
-                    gravity,
-                };
-                let mut terms = self.terms_mut();
-                // Everything parallel in the step (lagged quantities, contact detection, the
-                // solve) runs in the simulation's pool, so `threads` bounds it.
-                let mut step = || {
-                    // Lagged quantities are taken at the start of the step (v = 0, x = x0).
-                    {
-                        let zeros = vec![Vector3::zeros(); dof_blocks(&nodes, &bodies)];
-                        let rest_poses: Vec<BodyPose> = (0..bodies.len())
-                            .map(|b| BodyPose::at_rest(bodies.position[b], &bodies.orientation[b], dt))
-                            .collect();
-                        let state = EvalState {
-                            dt,
-                            time: t_end,
-                            gravity,
-                            nodes: &nodes,
-                            v: &zeros,
-                            x: &nodes.x,
-                            bodies: &bodies,
-                            poses: &rest_poses,
-                        };
-                        for t in terms.iter_mut() {
-                            t.before_step(&state);
-                        }
-                    }
-                    newton::solve(&mut newton_ws, &mut terms, &problem, &mut velocities, &newton_settings)
-                };
-                match &pool {
-                    Some(p) => p.install(step),
-                    None => step(),
-                }
-            };
-            self.nodes = nodes;
-            self.bodies = bodies;
-            self.pool = pool;
-            self.newton = newton_ws;
-            match result {
-                Ok(report) => {
-                    times.add(&report.times);
-                    total_newton += report.iterations;
-                    apply_kinematic_map(
-                        &self.nodes,
-                        &self.bodies,
-                        &velocities,
-                        dt,
-                        &mut self.scratch_x,
-                        &mut self.scratch_poses,
-                    );
-                    let mut retry = Vec::new();
-                    {
-                        let nodes = std::mem::take(&mut self.nodes);
-                        let bodies = std::mem::take(&mut self.bodies);
-                        let x = std::mem::take(&mut self.scratch_x);
-                        let poses = std::mem::take(&mut self.scratch_poses);
-                        {
-                            let state = EvalState {
-                                dt,
-                                time: t_end,
-                                gravity,
-                                nodes: &nodes,
-                                v: &velocities,
-                                x: &x,
-                                bodies: &bodies,
-                                poses: &poses,
-                            };
-                            for t in self.terms_mut() {
-                                if let StepCheck::Retry(msg) = t.check_converged_step(&state) {
-                                    retry.push(msg);
-                                }
-                            }
-                        }
-                        self.nodes = nodes;
-                        self.bodies = bodies;
-                        self.scratch_x = x;
-                        self.scratch_poses = poses;
-                    }
-                    if !retry.is_empty() {
-                        hardening_retries += 1;
-                        self.summary.hardening_retries += 1;
-                        self.velocities = velocities;
-                        if hardening_retries > self.settings.max_hardening_retries {
-                            return Err(StarkError::StepFailed {
-                                time_s: self.time,
-                                dt_s: dt,
-                                dt_min_s: self.settings.min_time_step_s,
-                                reason: format!("still out of tolerance: {}", retry.join("; ")),
-                                no_retry: format!("after {hardening_retries} hardenings, the most allowed"),
-                            });
-                        }
-                        continue;
-                    }
-                    // Commit.
-                    std::mem::swap(&mut self.nodes.x, &mut self.scratch_x);
-                    let n_nodes = self.nodes.len();
-                    for i in 0..n_nodes {
-                        self.nodes.v[i] = if self.nodes.body[i] == NO_BODY {
-                            velocities[i]
-                        } else {
-                            // A rigid node's velocity, for output.
-                            (self.nodes.x[i] - self.scratch_x[i]) / dt
-                        };
-                    }
-                    commit_bodies(&mut self.bodies, &velocities, n_nodes, dt);
-                    self.time = t_end;
-                    {
-                        let nodes = std::mem::take(&mut self.nodes);
-                        let bodies = std::mem::take(&mut self.bodies);
-                        {
-                            let poses: Vec<BodyPose> = (0..bodies.len())
-                                .map(|b| BodyPose::at_rest(bodies.position[b], &bodies.orientation[b], dt))
-                                .collect();
-                            let state = EvalState {
-                                dt,
-                                time: t_end,
-                                gravity,
-                                nodes: &nodes,
-                                v: &velocities,
-                                x: &nodes.x,
-                                bodies: &bodies,
-                                poses: &poses,
-                            };
-                            for t in self.terms_mut() {
-                                t.after_step(&state);
-                            }
-                        }
-                        self.nodes = nodes;
-                        self.bodies = bodies;
-                    }
-                    self.velocities = velocities;
-                    self.fire_spawns(self.time, true)?;
-                    // A shortened last step leaves dt as it was (the run may continue).
-                    if self.settings.adaptive_time_step && !shortened {
-                        self.dt = (dt * self.settings.time_step_growth).min(self.settings.time_step_s);
-                    }
-                    let step_report = StepReport {
-                        step: self.summary.steps,
-                        time_s: self.time,
-                        dt_s: dt,
-                        newton_iterations: report.iterations,
-                        residual_n: report.residual_n,
-                        converged_by: report.converged_by,
-                        line_search_evaluations: report.line_search_evaluations,
-                        cg_iterations: report.cg_iterations,
-                        min_step_fraction: report.min_step_fraction,
-                        projected: report.projected,
-                        hardening_retries,
-                        failed_attempts,
-                        failure_reasons,
-                        total_newton_iterations: total_newton,
-                        wall_time_s: wall.elapsed().as_secs_f64(),
-                        times,
-                        contact: (!self.contact.objects().is_empty()).then_some(self.contact.stats),
-                    };
-                    self.record(&step_report)?;
-                    return Ok(step_report);
-                }
+            let attempt = self.prepare_attempt()?;
+            let report = match self.solve_attempt(&attempt) {
+                Ok(report) => report,
                 Err(failure) => {
-                    self.velocities = velocities;
-                    failure_reasons.push(format!("dt {dt:.3e} s: {failure}"));
-                    failed_attempts += 1;
-                    self.summary.failed_steps += 1;
-                    let half = dt * 0.5;
-                    if !self.settings.adaptive_time_step || half < self.settings.min_time_step_s {
-                        let no_retry = if self.settings.adaptive_time_step {
-                            format!(
-                                "halving dt would go below the minimum {:e} s",
-                                self.settings.min_time_step_s
-                            )
-                        } else {
-                            "the time step is fixed: adaptive_time_step is off".to_string()
-                        };
-                        return Err(StarkError::StepFailed {
-                            time_s: self.time,
-                            dt_s: dt,
-                            dt_min_s: self.settings.min_time_step_s,
-                            reason: failure.to_string(),
-                            no_retry,
-                        });
-                    }
-                    self.dt = half;
+                    self.fail_attempt(&attempt, failure.to_string(), &mut tally)?;
+                    continue;
+                }
+            };
+            tally.times.add(&report.times);
+            tally.newton_iterations += report.iterations;
+            let retry = self.check_attempt(&attempt);
+            if !retry.is_empty() {
+                tally.hardening_retries += 1;
+                self.summary.hardening_retries += 1;
+                if tally.hardening_retries > self.settings.max_hardening_retries {
+                    return Err(StarkError::StepFailed {
+                        time_s: self.time,
+                        dt_s: attempt.dt,
+                        dt_min_s: self.settings.min_time_step_s,
+                        reason: format!("still out of tolerance: {}", retry.join("; ")),
+                        no_retry: format!("after {} hardenings, the most allowed", tally.hardening_retries),
+                    });
+                }
+                continue;
+            }
+            self.commit_attempt(&attempt);
+            self.fire_spawns(self.time, true)?;
+            // A shortened last step leaves dt as it was (the run may continue).
+            if self.settings.adaptive_time_step && !attempt.shortened {
+                self.dt = (attempt.dt * self.settings.time_step_growth).min(self.settings.time_step_s);
+            }
+            let step_report = self.step_report(&attempt, &report, tally, wall);
+            self.record(&step_report)?;
+            return Ok(step_report);
+        }
+    }
+
+    /// The next attempt's step size and end time, after the events due by then and with the
+    /// contact settings and stiffness of that time.
+    fn prepare_attempt(&mut self) -> Result<Attempt> {
+        // The last step of a run is shortened to land on its end time (a step within rounding
+        // of the remaining time is taken whole, so that runs split at a step boundary repeat
+        // the steps of one run bit for bit).
+        let (dt, t_end, shortened) = match self.step_end_limit {
+            Some(end) if end - self.time < self.dt * (1.0 - 1e-6) => (end - self.time, end, true),
+            _ => (self.dt, self.time + self.dt, false),
+        };
+        self.run_events(t_end)?;
+        self.contact.settings = self.settings.contact.clone();
+        if self.contact.needs_stiffness() {
+            let mut masses = self.deformables.inertia.node_masses(self.nodes.len());
+            RigidBodies::set_node_contact_masses(&self.nodes, &self.bodies, &mut masses);
+            let g = self.gravity().norm();
+            self.contact.initialize_stiffness(&masses, self.settings.time_step_s, g);
+        }
+        Ok(Attempt {
+            dt,
+            t_end,
+            gravity: self.gravity(),
+            shortened,
+        })
+    }
+
+    /// Lag the terms' quantities at the start of the step and solve for the end-of-step
+    /// velocities with Newton, starting from those the last attempt left in `velocities`.
+    fn solve_attempt(&mut self, attempt: &Attempt) -> std::result::Result<NewtonReport, NewtonFailure> {
+        let StepParts {
+            mut terms,
+            settings,
+            nodes,
+            bodies,
+            velocities,
+            newton,
+            pool,
+            ..
+        } = self.parts();
+        let problem = StepProblem {
+            nodes,
+            bodies,
+            dt: attempt.dt,
+            time: attempt.t_end,
+            gravity: attempt.gravity,
+        };
+        // Everything parallel in the step (lagged quantities, contact detection, the solve) runs
+        // in the simulation's pool, so `threads` bounds it.
+        let mut step = || {
+            // Lagged quantities are taken at the start of the step (v = 0, x = x0).
+            {
+                let zeros = vec![Vector3::zeros(); dof_blocks(nodes, bodies)];
+                let poses = rest_poses(bodies, attempt.dt);
+                let state = attempt.state(nodes, bodies, &zeros, &nodes.x, &poses);
+                for t in terms.iter_mut() {
+                    t.before_step(&state);
                 }
             }
+            newton::solve(newton, &mut terms, &problem, velocities, &settings.newton)
+        };
+        match pool {
+            Some(p) => p.install(step),
+            None => step(),
+        }
+    }
+
+    /// Place the nodes and bodies at the converged velocities (into the scratch positions and
+    /// poses) and ask every term whether the step is within its tolerances; returns the reasons
+    /// to retry it (none when it passes).
+    fn check_attempt(&mut self, attempt: &Attempt) -> Vec<String> {
+        let p = self.parts();
+        apply_kinematic_map(
+            p.nodes,
+            p.bodies,
+            p.velocities,
+            attempt.dt,
+            p.scratch_x,
+            p.scratch_poses,
+        );
+        let state = attempt.state(p.nodes, p.bodies, p.velocities, p.scratch_x, p.scratch_poses);
+        let mut retry = Vec::new();
+        for t in p.terms {
+            if let StepCheck::Retry(msg) = t.check_converged_step(&state) {
+                retry.push(msg);
+            }
+        }
+        retry
+    }
+
+    /// Make the checked attempt the start of the next step: positions and velocities of nodes
+    /// and bodies, the time, and what the terms carry over (`after_step`).
+    fn commit_attempt(&mut self, attempt: &Attempt) {
+        let dt = attempt.dt;
+        std::mem::swap(&mut self.nodes.x, &mut self.scratch_x);
+        let n_nodes = self.nodes.len();
+        for i in 0..n_nodes {
+            self.nodes.v[i] = if self.nodes.body[i] == NO_BODY {
+                self.velocities[i]
+            } else {
+                // A rigid node's velocity, for output.
+                (self.nodes.x[i] - self.scratch_x[i]) / dt
+            };
+        }
+        commit_bodies(&mut self.bodies, &self.velocities, n_nodes, dt);
+        self.time = attempt.t_end;
+        let p = self.parts();
+        let poses = rest_poses(p.bodies, dt);
+        let state = attempt.state(p.nodes, p.bodies, p.velocities, &p.nodes.x, &poses);
+        for t in p.terms {
+            t.after_step(&state);
+        }
+    }
+
+    /// A failed attempt: halve dt for the next one, or fail the step when dt is fixed or its half
+    /// would go below the minimum.
+    fn fail_attempt(&mut self, attempt: &Attempt, failure: String, tally: &mut StepTally) -> Result<()> {
+        let dt = attempt.dt;
+        tally.failure_reasons.push(format!("dt {dt:.3e} s: {failure}"));
+        tally.failed_attempts += 1;
+        self.summary.failed_steps += 1;
+        let half = dt * 0.5;
+        if !self.settings.adaptive_time_step || half < self.settings.min_time_step_s {
+            let no_retry = if self.settings.adaptive_time_step {
+                format!(
+                    "halving dt would go below the minimum {:e} s",
+                    self.settings.min_time_step_s
+                )
+            } else {
+                "the time step is fixed: adaptive_time_step is off".to_string()
+            };
+            return Err(StarkError::StepFailed {
+                time_s: self.time,
+                dt_s: dt,
+                dt_min_s: self.settings.min_time_step_s,
+                reason: failure,
+                no_retry,
+            });
+        }
+        self.dt = half;
+        Ok(())
+    }
+
+    /// The log line of the committed attempt.
+    fn step_report(&self, attempt: &Attempt, report: &NewtonReport, tally: StepTally, wall: Instant) -> StepReport {
+        StepReport {
+            step: self.summary.steps,
+            time_s: self.time,
+            dt_s: attempt.dt,
+            newton_iterations: report.iterations,
+            residual_n: report.residual_n,
+            converged_by: report.converged_by,
+            line_search_evaluations: report.line_search_evaluations,
+            cg_iterations: report.cg_iterations,
+            min_step_fraction: report.min_step_fraction,
+            projected: report.projected,
+            hardening_retries: tally.hardening_retries,
+            failed_attempts: tally.failed_attempts,
+            failure_reasons: tally.failure_reasons,
+            total_newton_iterations: tally.newton_iterations,
+            wall_time_s: wall.elapsed().as_secs_f64(),
+            times: tally.times,
+            contact: (!self.contact.objects().is_empty()).then_some(self.contact.stats),
         }
     }
 

@@ -1,11 +1,14 @@
 //! Simulation state: the flat node arrays of all deformables and the view of one Newton iterate
 //! that energies evaluate.
 
-use crate::energy::kinematics::BodyPose;
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
 /// `NodeArrays::body` of a deformable node: it is not attached to a rigid body.
 pub const NO_BODY: u32 = u32::MAX;
+
+/// A DOF block that is not there: padding of an element's stencil, or a rigid node's block in
+/// [`DofMap::dof_of_block`].
+pub const NO_DOF: u32 = u32::MAX;
 
 /// All deformable nodes of a simulation in one flat set of arrays (segmented per object by
 /// [`NodeSetHandle`](crate::deformables::NodeSetHandle)).
@@ -113,6 +116,34 @@ pub fn angular_block(n_nodes: usize, b: usize) -> u32 {
     (n_nodes + 2 * b + 1) as u32
 }
 
+/// Trial pose of a rigid body and the derivatives of its rotation with respect to `ω`. Made by
+/// the kinematic map (`BodyPose::new` and `BodyPose::at_rest` in `energy::kinematics`).
+#[derive(Clone, Copy, Debug)]
+pub struct BodyPose {
+    /// Centre of mass, m.
+    pub t: Vector3<f64>,
+    /// Rotation matrix.
+    pub r: Matrix3<f64>,
+    /// `∂R/∂ω_k`, s.
+    pub dr: [Matrix3<f64>; 3],
+    /// `∂²R/∂ω_k∂ω_l`, s².
+    pub d2r: [[Matrix3<f64>; 3]; 3],
+}
+
+impl BodyPose {
+    /// World position of the body-local point `p`.
+    #[inline]
+    pub fn point(&self, p: &Vector3<f64>) -> Vector3<f64> {
+        self.t + self.r * p
+    }
+
+    /// `∂x/∂ω` of the body-local point `p` (columns `∂R/∂ω_k · p`).
+    #[inline]
+    pub fn point_jacobian_w(&self, p: &Vector3<f64>) -> Matrix3<f64> {
+        Matrix3::from_columns(&[self.dr[0] * p, self.dr[1] * p, self.dr[2] * p])
+    }
+}
+
 /// The state at one Newton iterate: start-of-step state plus the trial end-of-step velocities.
 ///
 /// Positions are functions of the unknown velocities (backward Euler, DESIGN §2): a deformable node
@@ -164,43 +195,13 @@ impl EvalState<'_> {
 }
 
 /// Positions `x0 + dt·v` for all deformable nodes (only; rigid nodes are placed by
-/// [`apply_kinematic_map`]).
+/// [`apply_kinematic_map`](crate::energy::kinematics::apply_kinematic_map)).
 pub fn positions_from_velocities(nodes: &NodeArrays, v: &[Vector3<f64>], dt: f64, out: &mut Vec<Vector3<f64>>) {
     use rayon::prelude::*;
     out.resize(nodes.len(), Vector3::zeros());
     out.par_iter_mut()
         .zip(nodes.x.par_iter().zip(v[..nodes.len()].par_iter()))
         .for_each(|(x, (x0, v))| *x = x0 + v * dt);
-}
-
-/// The kinematic map (DESIGN §2): body poses and all node positions from the DOF velocities `v`.
-pub fn apply_kinematic_map(
-    nodes: &NodeArrays,
-    bodies: &BodyArrays,
-    v: &[Vector3<f64>],
-    dt: f64,
-    x: &mut Vec<Vector3<f64>>,
-    poses: &mut Vec<BodyPose>,
-) {
-    let n = nodes.len();
-    poses.clear();
-    poses.extend((0..bodies.len()).map(|b| {
-        BodyPose::new(
-            bodies.position[b],
-            &bodies.orientation[b],
-            &v[linear_block(n, b) as usize],
-            &v[angular_block(n, b) as usize],
-            dt,
-        )
-    }));
-    positions_from_velocities(nodes, v, dt, x);
-    if !bodies.is_empty() {
-        for (i, &b) in nodes.body.iter().enumerate() {
-            if b != NO_BODY {
-                x[i] = poses[b as usize].point(&nodes.rest[i]);
-            }
-        }
-    }
 }
 
 /// The start-of-step DOF velocities: node velocities (zero for rigid nodes), then per body its
@@ -235,14 +236,13 @@ pub fn dof_blocks(nodes: &NodeArrays, bodies: &BodyArrays) -> usize {
 pub struct DofMap {
     /// The block of each unknown.
     pub block_of_dof: Vec<u32>,
-    /// The unknown of each block ([`NO_DOF`](crate::energy::term::NO_DOF) for rigid nodes).
+    /// The unknown of each block ([`NO_DOF`] for rigid nodes).
     pub dof_of_block: Vec<u32>,
 }
 
 impl DofMap {
     /// The unknowns of a state: every deformable node's block and both blocks of every body.
     pub fn new(nodes: &NodeArrays, bodies: &BodyArrays) -> Self {
-        use crate::energy::term::NO_DOF;
         let n_blocks = dof_blocks(nodes, bodies);
         let mut map = DofMap {
             block_of_dof: Vec::with_capacity(n_blocks),

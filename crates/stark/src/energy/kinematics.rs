@@ -11,21 +11,11 @@
 use super::dual::HyperDual;
 use super::psd::project_psd;
 use super::scalar::Scalar;
-use super::term::NO_DOF;
+use crate::state::{angular_block, linear_block, positions_from_velocities, BodyArrays, NodeArrays, NO_BODY, NO_DOF};
 use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
 
-/// Trial pose of a rigid body and the derivatives of its rotation with respect to `ω`.
-#[derive(Clone, Copy, Debug)]
-pub struct BodyPose {
-    /// Centre of mass, m.
-    pub t: Vector3<f64>,
-    /// Rotation matrix.
-    pub r: Matrix3<f64>,
-    /// `∂R/∂ω_k`, s.
-    pub dr: [Matrix3<f64>; 3],
-    /// `∂²R/∂ω_k∂ω_l`, s².
-    pub d2r: [[Matrix3<f64>; 3]; 3],
-}
+// The pose type lives with the state it is part of; its constructors are the kinematic map's.
+pub use crate::state::BodyPose;
 
 impl BodyPose {
     /// The pose at rest (`v = ω = 0`): the start-of-step pose.
@@ -58,17 +48,35 @@ impl BodyPose {
         }
         pose
     }
+}
 
-    /// World position of the body-local point `p`.
-    #[inline]
-    pub fn point(&self, p: &Vector3<f64>) -> Vector3<f64> {
-        self.t + self.r * p
-    }
-
-    /// `∂x/∂ω` of the body-local point `p` (columns `∂R/∂ω_k · p`).
-    #[inline]
-    pub fn point_jacobian_w(&self, p: &Vector3<f64>) -> Matrix3<f64> {
-        Matrix3::from_columns(&[self.dr[0] * p, self.dr[1] * p, self.dr[2] * p])
+/// The kinematic map (DESIGN §2): body poses and all node positions from the DOF velocities `v`.
+pub fn apply_kinematic_map(
+    nodes: &NodeArrays,
+    bodies: &BodyArrays,
+    v: &[Vector3<f64>],
+    dt: f64,
+    x: &mut Vec<Vector3<f64>>,
+    poses: &mut Vec<BodyPose>,
+) {
+    let n = nodes.len();
+    poses.clear();
+    poses.extend((0..bodies.len()).map(|b| {
+        BodyPose::new(
+            bodies.position[b],
+            &bodies.orientation[b],
+            &v[linear_block(n, b) as usize],
+            &v[angular_block(n, b) as usize],
+            dt,
+        )
+    }));
+    positions_from_velocities(nodes, v, dt, x);
+    if !bodies.is_empty() {
+        for (i, &b) in nodes.body.iter().enumerate() {
+            if b != NO_BODY {
+                x[i] = poses[b as usize].point(&nodes.rest[i]);
+            }
+        }
     }
 }
 

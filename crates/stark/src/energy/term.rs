@@ -7,9 +7,8 @@
 //! applies the kinematic map, derivatives and projection.
 
 use crate::state::EvalState;
-
-/// Padding value in a stencil: no DOF block.
-pub const NO_DOF: u32 = u32::MAX;
+/// Padding value in a stencil: no DOF block (defined with the DOF layout in `state`).
+pub use crate::state::NO_DOF;
 
 /// Buffer layout of one element's output with `m` DOF blocks:
 /// `[energy, gradient (3m), Hessian blocks (m·m blocks of 9, block (a, b) at 9(a·m + b), row-major)]`.

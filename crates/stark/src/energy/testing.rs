@@ -2,14 +2,16 @@
 //! users writing their own potentials.
 
 use super::dual::HyperDual;
-use super::kinematics::BodyPose;
+use super::kinematics::{apply_kinematic_map, BodyPose};
 use super::potential::{dual_derivatives, FastDerivatives, Potential, Stencil};
 use super::scalar::Scalar;
 use super::tensor::Vec3;
-use crate::state::{apply_kinematic_map, BodyArrays, EvalState, NodeArrays, NO_BODY};
+use super::term::{element_stride, EnergyTerm, EvalMode, NO_DOF};
+use crate::state::{BodyArrays, EvalState, NodeArrays, NO_BODY};
 use nalgebra::Vector3;
 
 /// A self-contained state for evaluating energies in tests.
+#[derive(Clone)]
 pub struct TestState {
     /// Node arrays (start-of-step positions and velocities).
     pub nodes: NodeArrays,
@@ -68,6 +70,15 @@ impl TestState {
         self.bodies = bodies;
         self.place();
         self
+    }
+
+    /// The same state with component `i` of DOF block `block` of the trial velocities moved by
+    /// `h` (positions and poses follow through the kinematic map).
+    pub fn with_dof_moved(&self, block: u32, i: usize, h: f64) -> Self {
+        let mut s = self.clone();
+        s.v[block as usize][i] += h;
+        s.place();
+        s
     }
 
     fn place(&mut self) {
@@ -179,4 +190,83 @@ pub fn assert_derivatives<P: Potential<N>, const N: usize>(p: &P, state: &EvalSt
         "{}: generated derivatives vs hyper-duals, relative error {ef:e}",
         p.name()
     );
+}
+
+/// Relative errors of one element of an [`EnergyTerm`] in DOF space (velocity blocks, through the
+/// kinematic map), from [`term_element_derivative_errors`].
+#[derive(Clone, Copy, Debug)]
+pub struct TermDerivativeErrors {
+    /// Gradient against central differences of the element's energy.
+    pub gradient: f64,
+    /// Hessian against central differences of the element's gradient.
+    pub hessian_of_gradient: f64,
+    /// Hessian against second central differences of the element's energy (independent of the
+    /// hand-written gradient).
+    pub hessian_of_energy: f64,
+    /// Norm of the gradient, so a test can tell an inactive element (all errors trivially 0).
+    pub gradient_norm: f64,
+}
+
+/// Compare the gradient and exact Hessian that element `e` of `term` writes with central
+/// differences, in every DOF block of its stencil, at `state`. First derivatives use the step
+/// `step` (m/s or rad/s); second differences of the energy use `100·step`, since their rounding
+/// error grows as `1/step²`.
+pub fn term_element_derivative_errors<T: EnergyTerm + ?Sized>(
+    term: &T,
+    e: usize,
+    state: &TestState,
+    step: f64,
+) -> TermDerivativeErrors {
+    let eval = state.eval();
+    let w = term.stencil_width(&eval);
+    let mut stencils = vec![NO_DOF; w * term.num_elements()];
+    term.write_stencils(&eval, &mut stencils);
+    let blocks = &stencils[w * e..w * (e + 1)];
+    let element_at = |s: &TestState| {
+        let mut out = vec![0.0; element_stride(w)];
+        term.evaluate_element(e, &s.eval(), EvalMode::ExactHessian, &mut out);
+        out
+    };
+    let out = element_at(state);
+    let n = 3 * w;
+    let gradient = &out[1..1 + n];
+    let exact_hessian = &out[1 + n..];
+    // Entry (row, col) of the element's Hessian: block (a, b) at 9(a·w + b), row-major within. Rows
+    // and columns of padding blocks stay 0 in the differences, as the element must write them.
+    let hessian_index = |row: usize, col: usize| 9 * ((row / 3) * w + col / 3) + 3 * (row % 3) + col % 3;
+    let dofs: Vec<(usize, u32, usize)> = blocks
+        .iter()
+        .enumerate()
+        .filter(|(_, &blk)| blk != NO_DOF)
+        .flat_map(|(a, &blk)| (0..3).map(move |i| (3 * a + i, blk, i)))
+        .collect();
+    let mut fd_gradient = vec![0.0; n];
+    let mut fd_hessian = vec![0.0; n * n];
+    let mut fd2_hessian = vec![0.0; n * n];
+    let h2 = 100.0 * step;
+    for &(col, blk, i) in &dofs {
+        let (plus, minus) = (
+            element_at(&state.with_dof_moved(blk, i, step)),
+            element_at(&state.with_dof_moved(blk, i, -step)),
+        );
+        fd_gradient[col] = (plus[0] - minus[0]) / (2.0 * step);
+        for &(row, blk_r, r) in &dofs {
+            let at = hessian_index(row, col);
+            fd_hessian[at] = (plus[1 + row] - minus[1 + row]) / (2.0 * step);
+            let energy_at = |hc: f64, hr: f64| {
+                let mut s = state.with_dof_moved(blk, i, hc);
+                s.v[blk_r as usize][r] += hr;
+                s.place();
+                element_at(&s)[0]
+            };
+            fd2_hessian[at] =
+                (energy_at(h2, h2) - energy_at(h2, -h2) - energy_at(-h2, h2) + energy_at(-h2, -h2)) / (4.0 * h2 * h2);
+        }
+    }
+    TermDerivativeErrors {
+        gradient: rel_err(gradient, &fd_gradient),
+        hessian_of_gradient: rel_err(exact_hessian, &fd_hessian),
+        hessian_of_energy: rel_err(exact_hessian, &fd2_hessian),
+        gradient_norm: gradient.iter().map(|g| g * g).sum::<f64>().sqrt(),
+    }
 }

@@ -18,6 +18,7 @@ use std::path::{Path, PathBuf};
 
 use nalgebra::Vector3;
 
+use crate::error::StarkError;
 use crate::geometry::mesh::{merge_by_distance, MeshError};
 use crate::io::vtk::{read_vtk, VtkError};
 use crate::presets::meshes::Mesh;
@@ -128,6 +129,12 @@ fn compact<const K: usize>(vertices: &[Vector3<f64>], elements: &[[usize; K]]) -
     Mesh {
         vertices: kept,
         elements: elements.iter().map(|e| e.map(|i| old_to_new[i])).collect(),
+    }
+}
+
+impl From<MeshFileError> for StarkError {
+    fn from(e: MeshFileError) -> Self {
+        StarkError::Mesh(Box::new(e))
     }
 }
 

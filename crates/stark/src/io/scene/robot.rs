@@ -1,15 +1,13 @@
 //! `[[robot]]` entries of scene files: a URDF robot through [`Simulation::add_robot`].
 
-use super::rigid::{finite, orientation};
-use super::{At, Ctx, Rotate, SceneError};
+use super::errors::{At, Ctx, Res};
+use super::geometry::{finite, orientation, Rotate};
 use crate::robots::{JointOverride, LinkOverride, Robot, RobotOptions};
 use crate::simulation::Simulation;
 use nalgebra::UnitQuaternion;
 use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::path::Path;
-
-type Res<T> = std::result::Result<T, SceneError>;
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
