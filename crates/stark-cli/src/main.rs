@@ -126,6 +126,11 @@ enum Command {
         /// Write the results as JSON to this file.
         #[arg(long)]
         json: Option<PathBuf>,
+        /// The original Stark's wall times at 1 thread, measured on this machine in the same
+        /// sitting: a JSON object `{ "scene": seconds }`; the table then shows them and the
+        /// speed-up.
+        #[arg(long)]
+        original: Option<PathBuf>,
     },
 }
 
@@ -696,21 +701,33 @@ fn resume(
     })
 }
 
-/// The original Stark's wall time on this machine kind at 1 thread (reference/benchmark-scenes.md).
-fn original_wall_s(scene: &str) -> Option<f64> {
-    match scene {
-        "hanging_cloth" => Some(6.5),
-        "hanging_deformable_box" => Some(11.6),
-        "spinning_box_cloth" => Some(190.0),
-        "twisting_cloth" => Some(38.1),
-        "rb_point" => Some(0.25),
-        "deformable_and_rigid_collisions" => Some(3.1),
-        "simple_grasp" => Some(3.0),
-        _ => None,
-    }
+/// The original Stark's wall times, s, per scene, from `--original FILE`: a JSON object
+/// `{ "scene": seconds }` measured on this machine in the same sitting
+/// (../shared/tools/stark-original/). Stored figures from another day or machine are no reference
+/// (machines differ by 2×), so none are built in.
+fn read_original_walls(path: &std::path::Path) -> stark::Result<std::collections::BTreeMap<String, f64>> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| stark::StarkError::InvalidInput(format!("cannot read {}: {e}", path.display())))?;
+    serde_json::from_str(&text).map_err(|e| {
+        stark::StarkError::InvalidInput(format!(
+            "{}:{}:{}: expected a JSON object of scene names and wall times in seconds: {e}",
+            path.display(),
+            e.line(),
+            e.column()
+        ))
+    })
 }
 
-fn bench(scenes: Vec<String>, threads: Vec<usize>, json: Option<PathBuf>) -> stark::Result<()> {
+fn bench(
+    scenes: Vec<String>,
+    threads: Vec<usize>,
+    json: Option<PathBuf>,
+    original: Option<PathBuf>,
+) -> stark::Result<()> {
+    let original_walls = match &original {
+        Some(path) => read_original_walls(path)?,
+        None => Default::default(),
+    };
     let names: Vec<String> = if scenes.is_empty() {
         vec![
             "hanging_cloth".into(),
@@ -756,8 +773,10 @@ fn bench(scenes: Vec<String>, threads: Vec<usize>, json: Option<PathBuf>) -> sta
             let s = sim.run(scene.duration_s)?;
             let tt = &s.times;
             let total = tt.total_s().max(1e-12);
-            let original = original_wall_s(name)
-                .map(|w| format!("{w:.1} s"))
+            // The original's wall at 1 thread against ours at this thread count.
+            let original_s = original_walls.get(name.as_str()).copied();
+            let original = original_s
+                .map(|w| format!("{w:.1} s {:.2}x", w / s.wall_time_s))
                 .unwrap_or_else(|| "-".into());
             println!(
                 "{:<22} {:>3} {:>6} {:>9.2} {:>9.3} {:>9.2} {:>7.1} {:>6.0} {:>7.0} {:>5.0} {:>5.0} {:>6.0} {:>5.0} {:>9}",
@@ -776,7 +795,8 @@ fn bench(scenes: Vec<String>, threads: Vec<usize>, json: Option<PathBuf>) -> sta
                 100.0 * tt.line_search_s / total,
                 original
             );
-            results.push(serde_json::json!({ "scene": name, "threads": t, "summary": s, "original_wall_s": original_wall_s(name) }));
+            results
+                .push(serde_json::json!({ "scene": name, "threads": t, "summary": s, "original_wall_s": original_s }));
         }
     }
     if let Some(path) = json {
@@ -857,7 +877,12 @@ fn main() -> ExitCode {
             println!("{}", path.display());
             ExitCode::SUCCESS
         }),
-        Command::Bench { scenes, threads, json } => bench(scenes, threads, json).map(|()| ExitCode::SUCCESS),
+        Command::Bench {
+            scenes,
+            threads,
+            json,
+            original,
+        } => bench(scenes, threads, json, original).map(|()| ExitCode::SUCCESS),
     };
     match result {
         Ok(code) => code,

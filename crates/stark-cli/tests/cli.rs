@@ -95,6 +95,33 @@ fn list_is_aligned() {
     }
 }
 
+/// `stark bench --original FILE` shows the original's walls measured in the same sitting and the
+/// speed-up; a malformed file is named with its line and column.
+#[test]
+fn bench_compares_with_the_original_walls_it_is_given() {
+    let dir = std::env::temp_dir().join(format!("stark-cli-bench-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let walls = dir.join("walls.json");
+    std::fs::write(&walls, r#"{ "rb_point": 0.5 }"#).unwrap();
+    let out = ok(stark()
+        .args(["bench", "--scenes", "rb_point", "--threads", "1", "--original"])
+        .arg(&walls)
+        .output()
+        .unwrap());
+    let row = out.lines().find(|l| l.starts_with("rb_point")).expect("a row for rb_point");
+    assert!(row.contains("0.5 s ") && row.trim_end().ends_with('x'), "{row}");
+    std::fs::write(&walls, "{ \"rb_point\": \"fast\" }").unwrap();
+    let out = stark()
+        .args(["bench", "--scenes", "rb_point", "--threads", "1", "--original"])
+        .arg(&walls)
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("walls.json:1:") && err.contains("wall times in seconds"), "{err}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 #[cfg(unix)]
 #[test]
 fn sigint_prints_the_summary_keeps_the_logs_and_the_checkpoint_resumes() {
