@@ -108,7 +108,10 @@ fn bench_compares_with_the_original_walls_it_is_given() {
         .arg(&walls)
         .output()
         .unwrap());
-    let row = out.lines().find(|l| l.starts_with("rb_point")).expect("a row for rb_point");
+    let row = out
+        .lines()
+        .find(|l| l.starts_with("rb_point"))
+        .expect("a row for rb_point");
     assert!(row.contains("0.5 s ") && row.trim_end().ends_with('x'), "{row}");
     std::fs::write(&walls, "{ \"rb_point\": \"fast\" }").unwrap();
     let out = stark()
@@ -118,7 +121,10 @@ fn bench_compares_with_the_original_walls_it_is_given() {
         .unwrap();
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("walls.json:1:") && err.contains("wall times in seconds"), "{err}");
+    assert!(
+        err.contains("walls.json:1:") && err.contains("wall times in seconds"),
+        "{err}"
+    );
     std::fs::remove_dir_all(&dir).ok();
 }
 

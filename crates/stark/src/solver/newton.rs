@@ -278,6 +278,8 @@ pub fn solve(
     for t in terms.iter_mut() {
         t.use_definite_hessian(definite);
     }
+    // Diagnostics on stderr: one line per iteration, and which terms rose at a cut step.
+    let trace = std::env::var_os("STARK_NEWTON_TRACE").is_some();
     let mut first_residual: Option<f64> = None;
     let mut rebalanced = false;
     // A Cholesky factorisation of this step's Hessian exists (see the linear solve).
@@ -345,7 +347,7 @@ pub fn solve(
             report.residual_n = residual;
             report.iterations = iteration;
             if residual < settings.residual_tolerance_n {
-                if std::env::var_os("STARK_NEWTON_TRACE").is_some() {
+                if trace {
                     eprintln!("done it {iteration} res {residual:.3e}");
                 }
                 report.converged_by = ConvergedBy::Residual;
@@ -444,6 +446,16 @@ pub fn solve(
         };
         report.times.ccd_s += t_ccd.elapsed().as_secs_f64();
         let t3 = Instant::now();
+        if trace && alpha < 1.0 {
+            eprintln!("  CCD bounds the step at {alpha:.3e}");
+        }
+        // Each term's energy at the iterate, to name the terms that rise at a cut step.
+        let term_energies: Vec<f64> = if trace {
+            let here = problem.state(v, &ws.x, &ws.poses);
+            terms.iter().map(|t| t.energy(&here)).collect()
+        } else {
+            Vec::new()
+        };
         report.min_step_fraction = report.min_step_fraction.min(alpha);
         // Below this the energy difference is rounding noise.
         let noise = 1e-13 * sums.energy_abs;
@@ -487,6 +499,21 @@ pub fn solve(
             // lets the iterate wander: by ~1e-9 m along a stiff barrier, i.e. 1e-4 N).
             let unresolvable = -alpha * descent < resolvable;
             let armijo = e <= energy + settings.armijo * alpha * descent + noise;
+            if trace && !armijo {
+                let mut rises: Vec<(f64, &str)> = terms
+                    .iter()
+                    .zip(&term_energies)
+                    .map(|(t, e0)| (t.energy(&trial) - e0, t.name()))
+                    .collect();
+                rises.sort_by(|a, b| b.0.total_cmp(&a.0));
+                let top: Vec<String> = rises.iter().take(3).map(|(d, n)| format!("{n} {d:+.3e}")).collect();
+                eprintln!(
+                    "  cut at {alpha:.3e}: ΔE {:+.3e} (model {:+.3e}); by term: {}",
+                    e - energy,
+                    alpha * descent,
+                    top.join(", ")
+                );
+            }
             if e.is_finite() && armijo && (!unresolvable || e < energy - resolvable) {
                 accepted = true;
                 break;
@@ -563,7 +590,7 @@ pub fn solve(
                 }
             }
         }
-        if std::env::var_os("STARK_NEWTON_TRACE").is_some() {
+        if trace {
             // Diagnostics: one line per iteration on stderr (the residual, the accepted step
             // fraction, the Hessians used, the DOF block of the step's largest entry).
             eprintln!(
