@@ -23,6 +23,14 @@
 //! `max_stiffness_factor` times its initial value. A user-set stiffness applies to every pair.
 
 use super::barrier::{barrier, BarrierKind};
+use super::objects::sorted_objects;
+use super::term::node_maps;
+use super::Contact;
+use crate::energy::kinematics::element_blocks;
+use crate::energy::term::{element_stride, NO_DOF};
+use crate::energy::{EnergyTerm, EvalMode};
+use crate::state::EvalState;
+use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
 /// `κ` of every pair of contact objects (symmetric), 0 until chosen.
@@ -164,6 +172,162 @@ pub fn object_contact_masses(objects: usize, points: &[u32], point_obj: &[u16], 
         .zip(&count)
         .map(|(&s, &c)| if c > 0 { s / c as f64 } else { 0.0 })
         .collect()
+}
+
+impl Contact {
+    /// Some pair of objects has no barrier stiffness yet (see [`Contact::initialize_stiffness`]).
+    pub fn needs_stiffness(&self) -> bool {
+        self.kappa.needs_initialization()
+    }
+
+    /// Choose the barrier stiffness of the pairs of objects that have none (`contact::stiffness`)
+    /// from the nodes' effective contact masses (kg; 0 for kinematic nodes), the time step (s) and
+    /// the magnitude of gravity (m/s²).
+    pub fn initialize_stiffness(&mut self, node_masses_kg: &[f64], dt: f64, gravity_m_s2: f64) {
+        let masses = object_contact_masses(self.objects.len(), &self.points, &self.point_obj, node_masses_kg);
+        let thickness: Vec<f64> = self.objects.iter().map(|o| o.thickness_m).collect();
+        self.object_masses_kg = masses.clone();
+        self.kappa.initialize(
+            self.settings.stiffness,
+            &masses,
+            |a, b| thickness[a] + thickness[b],
+            dt,
+            gravity_m_s2,
+            self.settings.barrier,
+        );
+        self.stats.stiffness = self.kappa.max();
+    }
+
+    /// IPC's gradient balance per pair of objects (`EnergyTerm::rebalance`): stiffen the pairs whose
+    /// barrier is too soft for the load they carry; whether any `κ` changed.
+    pub(super) fn rebalance_stiffness(&mut self, state: &EvalState, gradient: &[f64]) -> bool {
+        if self.settings.stiffness.is_some() || self.pairs.is_empty() {
+            return false;
+        }
+        let distances: Vec<f64> = self.pairs.iter().map(|p| Self::pair_distance(p, state.x)).collect();
+        let kind = self.settings.barrier;
+        // Pairs of objects whose load is to be measured (IPC's gradient balance, per pair of
+        // objects): engaged (closer than 0.9 d̂) and either never measured or pressed below a
+        // tenth of d̂ (the load grew).
+        let mut keys: Vec<[u16; 2]> = Vec::new();
+        for (p, &d) in self.pairs.iter().zip(&distances) {
+            let key = sorted_objects(p.objects);
+            let engaged = d < 0.9 * p.dhat;
+            if engaged && (!self.kappa.balanced(key[0] as usize, key[1] as usize) || d < 0.1 * p.dhat) {
+                keys.push(key);
+            }
+        }
+        keys.sort_unstable();
+        keys.dedup();
+        if keys.is_empty() {
+            return false;
+        }
+        let w = self.stencil_width(state);
+        let mut blocks = vec![NO_DOF; w];
+        let mut out = vec![0.0; element_stride(w)];
+        // Kinematic nodes (prescribed obstacles) take any reaction: they are not balanced.
+        let kinematic: std::collections::BTreeSet<u32> = self
+            .points
+            .iter()
+            .zip(&self.point_obj)
+            .filter(|(_, &o)| self.object_masses_kg.get(o as usize).is_some_and(|&m| m == 0.0))
+            .map(|(&p, _)| p)
+            .collect();
+        // The barrier's DOF-space gradient, in total and per unit κ of each measured key.
+        let mut barrier_total: std::collections::BTreeMap<u32, Vector3<f64>> = Default::default();
+        let mut per_unit: Vec<std::collections::BTreeMap<u32, Vector3<f64>>> = vec![Default::default(); keys.len()];
+        let mut slope_sum = vec![0.0; keys.len()];
+        let mut slope_count = vec![0usize; keys.len()];
+        for (e, (p, &d)) in self.pairs.iter().zip(&distances).enumerate() {
+            if w == 4 {
+                blocks.copy_from_slice(&p.nodes);
+            } else {
+                element_blocks(&node_maps(&p.nodes, state), &mut blocks);
+            }
+            self.evaluate_element(e, state, EvalMode::ProjectedHessian, &mut out);
+            let key = keys
+                .binary_search(&sorted_objects(p.objects))
+                .ok()
+                .filter(|_| d < 0.9 * p.dhat);
+            for (k, &b) in blocks.iter().enumerate() {
+                if b == NO_DOF {
+                    continue;
+                }
+                let g = Vector3::new(out[1 + 3 * k], out[2 + 3 * k], out[3 + 3 * k]);
+                *barrier_total.entry(b).or_insert_with(Vector3::zeros) += g;
+                if kinematic.contains(&b) {
+                    continue;
+                }
+                if let Some(i) = key {
+                    *per_unit[i].entry(b).or_insert_with(Vector3::zeros) += g / p.kappa;
+                }
+            }
+            if let Some(i) = key {
+                slope_sum[i] += barrier(kind, d, p.dhat).1.abs();
+                slope_count[i] += 1;
+            }
+        }
+        let other = |b: u32| {
+            let i = 3 * b as usize;
+            Vector3::new(gradient[i], gradient[i + 1], gradient[i + 2]) - barrier_total[&b]
+        };
+        // Least squares: the stiffnesses whose barrier forces best cancel everything else.
+        let n = keys.len();
+        let mut a = nalgebra::DMatrix::<f64>::zeros(n, n);
+        let mut r = nalgebra::DVector::<f64>::zeros(n);
+        for i in 0..n {
+            for (&b, g) in &per_unit[i] {
+                r[i] -= g.dot(&other(b));
+                for j in 0..n {
+                    if let Some(h) = per_unit[j].get(&b) {
+                        a[(i, j)] += g.dot(h);
+                    }
+                }
+            }
+        }
+        let solved = a.clone().lu().solve(&r);
+        let mut changed = false;
+        // Per measured pair of objects: the stiffness at which the barrier at the current gaps
+        // carries the measured load (friction's normal forces), and the one it is set to.
+        let mut load_kappa: Vec<f64> = vec![f64::NAN; n];
+        for (i, key) in keys.iter().enumerate() {
+            let (oa, ob) = (key[0] as usize, key[1] as usize);
+            let ls = solved
+                .as_ref()
+                .map(|k| k[i])
+                .filter(|k| k.is_finite() && *k > 0.0)
+                .unwrap_or(r[i] / a[(i, i)]);
+            if !(ls > 0.0 && ls.is_finite()) {
+                continue;
+            }
+            load_kappa[i] = ls;
+            // The load `ls·Σ|b′(d)|` it carries, to be carried at half the activation distance.
+            let dhat = self.dhat(key[0], key[1]);
+            let target = ls * (slope_sum[i] / slope_count[i] as f64) / barrier(kind, 0.5 * dhat, dhat).1.abs();
+            changed |= self
+                .kappa
+                .set_from_load(oa, ob, target, self.settings.max_stiffness_factor);
+        }
+        if changed {
+            // Friction's normal forces are the measured loads: lag them from the start of the
+            // step with the stiffness that carries them at the current gaps.
+            let x0 = &state.nodes.x;
+            let mut start = self.detect(x0);
+            for p in &mut start {
+                if let Ok(i) = keys.binary_search(&sorted_objects(p.objects)) {
+                    if load_kappa[i].is_finite() {
+                        p.kappa = load_kappa[i];
+                    }
+                }
+            }
+            self.lag_friction(&start, x0, x0, state.dt);
+            for p in &mut self.pairs {
+                p.kappa = self.kappa.get(p.objects[0] as usize, p.objects[1] as usize);
+            }
+            self.stats.stiffness = self.kappa.max();
+        }
+        changed
+    }
 }
 
 #[cfg(test)]

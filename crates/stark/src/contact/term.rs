@@ -1,0 +1,302 @@
+//! Contact as a solver term: elements, their derivatives in the DOF layout, and the step hooks.
+
+use super::pairs::{pair_derivatives, pair_energy};
+use super::Contact;
+use super::PairHessian;
+use crate::energy::kinematics::{element_blocks, map_element, MapProjection, NodeMap};
+use crate::energy::term::{element_stride, NO_DOF};
+use crate::energy::Node;
+use crate::energy::{EnergyTerm, EvalMode, HyperDual, Scalar, StepCheck, Vec3};
+use crate::error::Result;
+use crate::state::EvalState;
+
+/// How the nodes of a pair (padded with `NO_DOF`) depend on the DOFs.
+pub(super) fn node_maps<'s>(nodes: &[u32; 4], state: &'s EvalState) -> [NodeMap<'s>; 4] {
+    nodes.map(|i| {
+        if i == NO_DOF {
+            NodeMap::Fixed
+        } else {
+            Node::Point(i).map(state)
+        }
+    })
+}
+
+/// Write node-space derivatives of a 4-node stencil in the deformable DOF layout (`∂x/∂v = dt·I`).
+fn write_dofs(d: &HyperDual<4>, dt: f64, out: &mut [f64]) {
+    out[0] = d.value;
+    for (k, g) in d.grad.as_flattened().iter().enumerate() {
+        out[1 + k] = dt * g;
+    }
+    let dt2 = dt * dt;
+    let base = 13;
+    for a in 0..4 {
+        for b in 0..4 {
+            let blk = &mut out[base + 9 * (a * 4 + b)..base + 9 * (a * 4 + b) + 9];
+            for i in 0..3 {
+                for j in 0..3 {
+                    blk[3 * i + j] = dt2 * d.hess[a][i][b][j];
+                }
+            }
+        }
+    }
+}
+
+/// [`write_dofs`] for a stencil of deformable (`Free`) and absent (`Fixed`) nodes in the layout of
+/// [`element_stride`]`(width)` with the blocks of `element_blocks` (the free nodes in order).
+fn write_free_dofs(d: &HyperDual<4>, maps: &[NodeMap; 4], dt: f64, out: &mut [f64]) {
+    let width = (1..=8)
+        .find(|&w| element_stride(w) == out.len())
+        .expect("an element stride");
+    let mut slot = [usize::MAX; 4];
+    let mut m = 0;
+    for (a, map) in maps.iter().enumerate() {
+        if matches!(map, NodeMap::Free { .. }) {
+            slot[a] = m;
+            m += 1;
+        }
+    }
+    out.iter_mut().for_each(|o| *o = 0.0);
+    out[0] = d.value;
+    let dt2 = dt * dt;
+    let base = 1 + 3 * width;
+    for a in 0..4 {
+        let sa = slot[a];
+        if sa == usize::MAX {
+            continue;
+        }
+        for i in 0..3 {
+            out[1 + 3 * sa + i] = dt * d.grad[a][i];
+        }
+        for b in 0..4 {
+            let sb = slot[b];
+            if sb == usize::MAX {
+                continue;
+            }
+            let blk = &mut out[base + 9 * (sa * width + sb)..base + 9 * (sa * width + sb) + 9];
+            for i in 0..3 {
+                for j in 0..3 {
+                    blk[3 * i + j] = dt2 * d.hess[a][i][b][j];
+                }
+            }
+        }
+    }
+}
+
+impl EnergyTerm for Contact {
+    fn name(&self) -> &str {
+        "contact"
+    }
+    fn num_elements(&self) -> usize {
+        self.pairs.len() + self.friction_elements.len()
+    }
+    fn stencil_width(&self, state: &EvalState) -> usize {
+        // A point of a rigid body against a deformable triangle couples 2 + 3 blocks.
+        if self.has_rigid_objects(state) {
+            5
+        } else {
+            4
+        }
+    }
+    fn write_stencils(&self, state: &EvalState, out: &mut [u32]) {
+        let all = self
+            .pairs
+            .iter()
+            .map(|p| p.nodes)
+            .chain(self.friction_elements.iter().map(|f| f.nodes));
+        let w = self.stencil_width(state);
+        for (o, nodes) in out.chunks_exact_mut(w).zip(all) {
+            if w == 4 {
+                o.copy_from_slice(&nodes);
+            } else {
+                element_blocks(&node_maps(&nodes, state), o);
+            }
+        }
+    }
+    fn topology_version(&self) -> u64 {
+        self.version
+    }
+    fn energy(&self, state: &EvalState) -> f64 {
+        let kind = self.settings.barrier;
+        let barrier_energy: f64 = self
+            .pairs
+            .iter()
+            .map(|p| {
+                pair_energy(
+                    p,
+                    &Self::stencil_x(&p.nodes, state.x).map(|q| Vec3::<f64>::constant(&q)),
+                    p.kappa * p.multiplicity,
+                    kind,
+                )
+            })
+            .sum();
+        let friction_energy: f64 = self
+            .friction_elements
+            .iter()
+            .map(|f| f.energy(&Self::stencil_x(&f.nodes, state.x).map(|q| Vec3::<f64>::constant(&q))))
+            .sum();
+        barrier_energy + friction_energy
+    }
+    fn evaluate_element(&self, e: usize, state: &EvalState, mode: EvalMode, out: &mut [f64]) {
+        let mut d = HyperDual::<4>::constant(0.0);
+        // A barrier pair's Hessian is indefinite (the distance curves), and far from the solution
+        // its negative curvature can make the whole Hessian indefinite: there the pairs take a
+        // positive semi-definite form (IPC). Near the solution the other energies (inertia above
+        // all) carry that curvature, and the projected form would only overestimate it: Newton
+        // would converge linearly (measured on a folded towel under a robot: a contraction of
+        // 0.69 per iteration over 20 iterations at full steps). There the exact Hessian, and the
+        // solver projects anyway when the total turns out indefinite.
+        let hessian = if mode == EvalMode::ExactHessian && !self.definite_barriers {
+            PairHessian::Exact
+        } else {
+            self.settings.hessian
+        };
+        if e < self.pairs.len() {
+            let p = &self.pairs[e];
+            pair_derivatives(
+                p,
+                &Self::stencil_x(&p.nodes, state.x),
+                p.kappa * p.multiplicity,
+                self.settings.barrier,
+                hessian,
+                &mut d,
+            );
+        } else {
+            let f = &self.friction_elements[e - self.pairs.len()];
+            f.derivatives(&Self::stencil_x(&f.nodes, state.x), self.friction_majorizer, &mut d);
+        }
+        if out.len() == element_stride(4) {
+            write_dofs(&d, state.dt, out);
+        } else {
+            let nodes = if e < self.pairs.len() {
+                self.pairs[e].nodes
+            } else {
+                self.friction_elements[e - self.pairs.len()].nodes
+            };
+            let maps = node_maps(&nodes, state);
+            if maps.iter().all(|m| matches!(m, NodeMap::Free { .. } | NodeMap::Fixed)) {
+                // No rigid node (e.g. towel–towel pairs in a scene with bodies): the map is
+                // `dt·I` per node, written straight into the wider layout.
+                write_free_dofs(&d, &maps, state.dt, out);
+                return;
+            }
+            // Through the kinematic map; the position-space Hessian is already positive
+            // semi-definite, the rotation's second-order term may not be.
+            let projection = if hessian == PairHessian::Exact {
+                MapProjection::None
+            } else {
+                MapProjection::SecondOrderOnly
+            };
+            map_element(&maps, &d, state.dt, 5, projection, out);
+        }
+    }
+    fn before_step(&mut self, state: &EvalState) {
+        // Objects, thicknesses or enabled pairs may have changed since the last step.
+        *self.candidate_cache.get_mut().expect("no poisoned lock") = None;
+        self.rigid_split = self.split_rigid(state);
+        *self.validity_record.get_mut().expect("no poisoned lock") = (0, 0, 0.0);
+        if self.relag_pending {
+            self.relag_pending = false;
+        } else {
+            self.lag_solves = 1;
+            let pairs = self.detect(state.x);
+            self.lag_friction(&pairs, state.x, state.x, state.dt);
+        }
+        self.version += 1;
+    }
+    fn use_majorizer_hessian(&mut self, on: bool) {
+        self.friction_majorizer = on;
+    }
+    fn use_definite_hessian(&mut self, on: bool) {
+        self.definite_barriers = on;
+    }
+    fn prepare_evaluation(&mut self, state: &EvalState) {
+        let pairs = self.detect(state.x);
+        if pairs
+            .iter()
+            .map(|p| (p.kind, p.nodes))
+            .ne(self.pairs.iter().map(|p| (p.kind, p.nodes)))
+        {
+            self.version += 1;
+        }
+        self.pairs = pairs;
+        self.stats.active_pairs = self.pairs.len();
+    }
+    fn rebalance(&mut self, state: &EvalState, gradient: &[f64]) -> bool {
+        self.rebalance_stiffness(state, gradient)
+    }
+    fn max_step_fraction(&self, from: &EvalState, to: &EvalState) -> f64 {
+        if self.objects.is_empty() {
+            return 1.0;
+        }
+        let cached = self.candidate_cache.lock().expect("no poisoned lock").take();
+        let candidates = self.candidates_for(cached, from.x, to.x);
+        let (alpha, queries) = if self.settings.ccd {
+            self.ccd_fraction(&candidates, from.x, to.x)
+        } else {
+            (1.0, 0)
+        };
+        *self.candidate_cache.lock().expect("no poisoned lock") = Some(candidates);
+        *self.ccd_record.lock().expect("no poisoned lock") = (alpha, queries);
+        alpha
+    }
+    fn is_valid_state(&self, state: &EvalState) -> bool {
+        if self.rigid_split.is_empty() {
+            return true;
+        }
+        let t0 = std::time::Instant::now();
+        let valid = !self.rigid_pairs_intersect(state.x);
+        let mut r = self.validity_record.lock().expect("no poisoned lock");
+        r.0 += 1;
+        r.1 += usize::from(!valid);
+        r.2 += t0.elapsed().as_secs_f64();
+        valid
+    }
+    fn check_converged_step(&mut self, state: &EvalState) -> StepCheck {
+        if self.lag_solves < self.settings.friction_iterations && self.friction.iter().any(|&m| m > 0.0) {
+            let pairs = self.detect(state.x);
+            self.lag_friction(&pairs, state.x, &state.nodes.x, state.dt);
+            self.lag_solves += 1;
+            self.relag_pending = true;
+            return StepCheck::Retry(format!(
+                "friction re-lagged ({} of {})",
+                self.lag_solves, self.settings.friction_iterations
+            ));
+        }
+        StepCheck::Accept
+    }
+    fn save_state(&self) -> Vec<u8> {
+        self.save_checkpoint_state()
+    }
+    fn restore_state(&mut self, bytes: &[u8]) -> Result<(), String> {
+        self.restore_checkpoint_state(bytes)
+    }
+    fn after_step(&mut self, state: &EvalState) {
+        let pairs = self.detect(state.x);
+        let mut min_d = f64::INFINITY;
+        let mut too_close: Vec<[u16; 2]> = Vec::new();
+        for p in &pairs {
+            let d = Self::pair_distance(p, state.x);
+            min_d = min_d.min(d);
+            if d < self.settings.min_distance_fraction * p.dhat {
+                too_close.push(p.objects);
+            }
+        }
+        self.stats.min_distance_m = min_d;
+        // IPC's adaptive stiffness, per pair of objects: a pair this close means the barrier is
+        // too soft for the load it carries; stiffen it (bounded) so gaps stay resolvable.
+        too_close.sort_unstable();
+        too_close.dedup();
+        for [a, b] in too_close {
+            self.kappa
+                .stiffen(a as usize, b as usize, self.settings.max_stiffness_factor);
+        }
+        self.stats.stiffness = self.kappa.max();
+        let (fraction, queries) = *self.ccd_record.lock().expect("no poisoned lock");
+        self.stats.min_ccd_fraction = fraction;
+        self.stats.ccd_queries = queries;
+        let (checks, rejected, seconds) = *self.validity_record.lock().expect("no poisoned lock");
+        self.stats.validity_checks = checks;
+        self.stats.invalid_trials = rejected;
+        self.stats.validity_time_s = seconds;
+    }
+}

@@ -1,0 +1,170 @@
+//! Tests across the stages: validity of trial states and the Hessian switch.
+
+use crate::energy::kinematics::BodyPose;
+use crate::energy::EnergyTerm;
+use crate::state::{dof_blocks, EvalState};
+use crate::{Settings, Simulation};
+use nalgebra::{UnitQuaternion, Vector3};
+
+fn square(z: f64, half: f64) -> [Vector3<f64>; 4] {
+    [
+        Vector3::new(-half, -half, z),
+        Vector3::new(half, -half, z),
+        Vector3::new(half, half, z),
+        Vector3::new(-half, half, z),
+    ]
+}
+
+/// Run the contact term's `before_step` at the current state and return the validity of the
+/// positions `x` through `is_valid_state`.
+fn valid_at(sim: &mut Simulation, x: &[Vector3<f64>]) -> bool {
+    at_rest(sim, |contact, state| {
+        contact.before_step(state);
+        let trial = EvalState { x, ..*state };
+        contact.is_valid_state(&trial)
+    })
+}
+
+/// Call `f` with the contact term and the state of the simulation at rest (dt = 0.01 s).
+fn at_rest<R>(sim: &mut Simulation, f: impl FnOnce(&mut super::Contact, &EvalState) -> R) -> R {
+    let zeros = vec![Vector3::zeros(); dof_blocks(&sim.nodes, &sim.bodies)];
+    let poses: Vec<BodyPose> = (0..sim.bodies.len())
+        .map(|b| BodyPose::at_rest(sim.bodies.position[b], &sim.bodies.orientation[b], 0.01))
+        .collect();
+    let nodes = sim.nodes.clone();
+    let state = EvalState {
+        dt: 0.01,
+        time: 0.01,
+        gravity: Vector3::zeros(),
+        nodes: &nodes,
+        v: &zeros,
+        x: &nodes.x,
+        bodies: &sim.bodies,
+        poses: &poses,
+    };
+    f(&mut sim.contact, &state)
+}
+
+#[test]
+fn trial_states_with_rigid_crossings_are_invalid() {
+    let mut settings = Settings::default();
+    settings.contact.default_thickness_m = Some(1e-3);
+    let mut sim = Simulation::new(settings).unwrap();
+    // A 2 m sheet whose diagonal runs from (−1, −1) to (1, 1), and two 0.1 m boxes above
+    // it, far from the diagonal and the border.
+    let sheet = sim
+        .add_prescribed_surface("sheet", &square(0.0, 1.0), &[[0, 1, 2], [0, 2, 3]], 1e-3, 1e4)
+        .unwrap();
+    let (q, size) = (UnitQuaternion::identity(), Vector3::repeat(0.1));
+    let a = sim
+        .add_box("a", 1.0, size, Vector3::new(0.5, -0.5, 0.1), q, None)
+        .unwrap();
+    let b = sim
+        .add_box("b", 1.0, size, Vector3::new(-0.5, 0.5, 0.1), q, None)
+        .unwrap();
+    let x = sim.nodes.x.clone();
+    assert!(valid_at(&mut sim, &x));
+    // Box a straddles the sheet: only its vertical edges cross a sheet triangle.
+    let mut down = x.clone();
+    for i in a.mesh.nodes.range() {
+        down[i].z -= 0.1;
+    }
+    assert!(!valid_at(&mut sim, &down));
+    // Box a overlaps box b (rigid–rigid).
+    let mut over = x.clone();
+    for i in a.mesh.nodes.range() {
+        over[i] += Vector3::new(-0.95, 0.95, 0.03);
+    }
+    assert!(!valid_at(&mut sim, &over));
+    // Box a centred on the sheet's diagonal: the diagonal crosses its faces.
+    let mut moved = x.clone();
+    for i in a.mesh.nodes.range() {
+        moved[i] += Vector3::new(-0.5, -0.5, -0.1);
+    }
+    assert!(!valid_at(&mut sim, &moved));
+    // Pairs whose collisions are off are not tested.
+    sim.contact.disable_collision(sheet.contact, a.mesh.contact).unwrap();
+    assert!(valid_at(&mut sim, &down));
+    let _ = b;
+}
+
+/// Newton's `use_definite_hessian` switch: on (far from the solution), a pair whose distance
+/// curves assembles a positive semi-definite Hessian; off (near it), the exact one, whose
+/// negative curvature across the pair the inertia carries.
+#[test]
+fn barrier_pairs_take_their_exact_hessian_when_newton_asks() {
+    use crate::energy::psd::symmetric_eigen;
+    use crate::energy::EvalMode;
+    let mut settings = Settings::default();
+    settings.contact.default_thickness_m = Some(1e-3);
+    let mut sim = Simulation::new(settings).unwrap();
+    // Two triangles whose corners face each other 0.4 mm apart: one point–point pair.
+    let lower = [
+        Vector3::new(0.0, 0.0, 0.0),
+        Vector3::new(-1.0, 0.0, -1.0),
+        Vector3::new(0.0, -1.0, -1.0),
+    ];
+    let upper = lower.map(|p| Vector3::new(-p.x, -p.y, 4e-4 - p.z));
+    sim.add_prescribed_surface("lower", &lower, &[[0, 1, 2]], 1e-3, 1e4)
+        .unwrap();
+    sim.add_prescribed_surface("upper", &upper, &[[0, 1, 2]], 1e-3, 1e4)
+        .unwrap();
+    let masses_kg = vec![1e-3; sim.nodes.len()];
+    sim.contact.initialize_stiffness(&masses_kg, 0.01, 9.81);
+    let x = sim.nodes.x.clone();
+    assert!(valid_at(&mut sim, &x));
+    at_rest(&mut sim, |contact, state| {
+        contact.prepare_evaluation(state);
+        // The corners' point–point pair, and the edges that meet there (edge–edge, the same
+        // closest points).
+        let pairs = contact.pairs().len();
+        assert!(pairs >= 1);
+        let mut smallest_eigenvalue = |e: usize, definite: bool| {
+            contact.use_definite_hessian(definite);
+            let mut out = vec![0.0; crate::energy::term::element_stride(4)];
+            contact.evaluate_element(e, state, EvalMode::ExactHessian, &mut out);
+            // The 12×12 Hessian from its 3×3 blocks.
+            let mut h = [0.0; 144];
+            for (a, b, i, j) in hessian_block_entries() {
+                h[(3 * a + i) * 12 + 3 * b + j] = out[13 + 9 * (a * 4 + b) + 3 * i + j];
+            }
+            let (mut w, mut v) = ([0.0; 12], [0.0; 144]);
+            symmetric_eigen(&h, 12, &mut w, &mut v);
+            let scale = w.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+            w.iter().copied().fold(f64::INFINITY, f64::min) / scale
+        };
+        for e in 0..pairs {
+            let l = smallest_eigenvalue(e, true);
+            assert!(l > -1e-12, "definite form: pair {e}: {l}");
+        }
+        let exact = (0..pairs).map(|e| smallest_eigenvalue(e, false));
+        assert!(
+            exact.fold(f64::INFINITY, f64::min) < -1e-3,
+            "exact: negative curvature across"
+        );
+    });
+}
+
+/// (block row, block column, row, column) of the 4×4 blocks of 3×3 in an element buffer.
+fn hessian_block_entries() -> impl Iterator<Item = (usize, usize, usize, usize)> {
+    (0..4).flat_map(|a| (0..4).flat_map(move |b| (0..3).flat_map(move |i| (0..3).map(move |j| (a, b, i, j)))))
+}
+
+#[test]
+fn deformable_crossings_are_left_to_ccd_and_scenes_without_bodies_pay_nothing() {
+    let mut settings = Settings::default();
+    settings.contact.default_thickness_m = Some(1e-3);
+    let mut sim = Simulation::new(settings).unwrap();
+    sim.add_prescribed_surface("lower", &square(0.0, 1.0), &[[0, 1, 2], [0, 2, 3]], 1e-3, 1e4)
+        .unwrap();
+    sim.add_prescribed_surface("upper", &square(0.5, 0.5), &[[0, 1, 2], [0, 2, 3]], 1e-3, 1e4)
+        .unwrap();
+    let mut x = sim.nodes.x.clone();
+    // The upper sheet tilted through the lower one.
+    x[4].z = -0.5;
+    x[5].z = -0.5;
+    assert!(!sim.contact.find_intersections(&x).is_empty());
+    assert!(valid_at(&mut sim, &x), "deformable pairs are CCD's business");
+    assert!(sim.contact.rigid_split.is_empty());
+    assert_eq!(sim.contact.validity_record.lock().unwrap().0, 0, "no test ran");
+}
