@@ -81,6 +81,9 @@ pub struct StepReport {
     pub times: PhaseTimes,
     /// Contact statistics (when the scene has contact objects).
     pub contact: Option<ContactStats>,
+    /// The accepted attempt's force residual at each Newton iterate, N (not logged).
+    #[serde(skip)]
+    pub newton_residuals_n: Vec<f64>,
 }
 
 /// Totals of a run.
@@ -841,6 +844,7 @@ impl Simulation {
             wall_time_s: wall.elapsed().as_secs_f64(),
             times: tally.times,
             contact: (!self.contact.objects().is_empty()).then_some(self.contact.stats),
+            newton_residuals_n: report.residuals_n.clone(),
         }
     }
 

@@ -206,8 +206,11 @@ impl EnergyTerm for Contact {
     fn use_majorizer_hessian(&mut self, on: bool) {
         self.friction_majorizer = on;
     }
-    fn use_definite_hessian(&mut self, on: bool) {
+    fn use_definite_hessian(&mut self, on: bool) -> bool {
+        let changed =
+            self.definite_barriers != on && self.settings.hessian != PairHessian::Exact && !self.pairs.is_empty();
         self.definite_barriers = on;
+        changed
     }
     fn prepare_evaluation(&mut self, state: &EvalState) {
         let pairs = self.detect(state.x);

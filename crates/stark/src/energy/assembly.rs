@@ -41,8 +41,10 @@ const CHUNK: usize = 128;
 struct TermLayout {
     /// (topology version, elements, width) the layout was built for.
     key: Option<(u64, usize, usize)>,
-    /// The term's block pairs `(row, column)`, sorted and deduplicated.
-    pairs: Vec<(u32, u32)>,
+    /// The term's block pairs `(row, column)`, sorted and deduplicated; built only when the
+    /// pattern is rebuilt (sorting a contact term's millions of pairs at every change of its
+    /// active set cost a tenth of a folded towel's run).
+    pairs: Option<Vec<(u32, u32)>>,
     width: usize,
     /// Unknowns of each element (`width` each; its DOF blocks mapped through the [`DofMap`]).
     stencils: Vec<u32>,
@@ -134,6 +136,32 @@ fn merge_sorted(a: &[(u32, u32)], b: &[(u32, u32)]) -> Vec<(u32, u32)> {
     out
 }
 
+/// The block pairs `(row, column)` of `stencils` (`width` each), sorted and deduplicated.
+fn block_pairs(stencils: &[u32], width: usize) -> Vec<(u32, u32)> {
+    let mut pairs: Vec<(u32, u32)> = Vec::new();
+    for st in stencils.chunks_exact(width.max(1)) {
+        for &r in st.iter().filter(|&&r| r != NO_DOF) {
+            for &c in st.iter().filter(|&&c| c != NO_DOF) {
+                pairs.push((r, c));
+            }
+        }
+    }
+    pairs.par_sort_unstable();
+    pairs.dedup();
+    pairs
+}
+
+/// Whether every block of `stencils` (`width` each) is in the (symmetric) pattern of `matrix`.
+fn stencils_fit(matrix: &BlockSparseMatrix, stencils: &[u32], width: usize) -> bool {
+    stencils.par_chunks(width.max(1)).all(|st| {
+        st.iter().filter(|&&r| r != NO_DOF).all(|&r| {
+            st.iter()
+                .filter(|&&c| c != NO_DOF && r <= c)
+                .all(|&c| matrix.find(r, c).is_some())
+        })
+    })
+}
+
 fn slot_of(matrix: &BlockSparseMatrix, r: u32, c: u32) -> u32 {
     matrix.find(r, c).expect("block in pattern") as u32
 }
@@ -185,19 +213,9 @@ impl Assembler {
                 );
                 *s = dof;
             }
-            let mut pairs: Vec<(u32, u32)> = Vec::new();
-            for st in stencils.chunks_exact(m.max(1)) {
-                for &r in st.iter().filter(|&&r| r != NO_DOF) {
-                    for &c in st.iter().filter(|&&c| c != NO_DOF) {
-                        pairs.push((r, c));
-                    }
-                }
-            }
-            pairs.par_sort_unstable();
-            pairs.dedup();
             *layout = TermLayout {
                 key: Some(term_key),
-                pairs,
+                pairs: None,
                 width: m,
                 stencils,
                 ..Default::default()
@@ -219,15 +237,18 @@ impl Assembler {
                 .iter()
                 .zip(&changed)
                 .filter(|(_, &c)| c)
-                .all(|(layout, _)| layout.pairs.iter().all(|&(r, c)| self.matrix.find(r, c).is_some()));
+                .all(|(layout, _)| stencils_fit(&self.matrix, &layout.stencils, layout.width));
         let mut same_pattern = fits;
         if !fits {
             // Merge the sorted pair lists of all terms and the diagonal; keep the old pattern's
             // blocks too while they are few (the pairs that come and go), not when the contacts
             // have moved on.
             let mut pairs: Vec<(u32, u32)> = (0..n_blocks as u32).map(|b| (b, b)).collect();
-            for layout in &self.layouts {
-                pairs = merge_sorted(&pairs, &layout.pairs);
+            for layout in &mut self.layouts {
+                let term_pairs = layout
+                    .pairs
+                    .get_or_insert_with(|| block_pairs(&layout.stencils, layout.width));
+                pairs = merge_sorted(&pairs, term_pairs);
             }
             let old_pairs = (self.matrix.n_blocks == n_blocks).then(|| self.matrix.pattern_pairs());
             same_pattern = exact && old_pairs.as_ref() == Some(&pairs);

@@ -90,8 +90,12 @@ pub trait EnergyTerm: Send + Sync {
     /// indefinite near its active set assembles a positive semi-definite form (contact
     /// barriers, far from the solution and where their exact Hessians made the total
     /// indefinite); with `false` (the default), its exact Hessian. The solver still projects
-    /// every term when the total turns out indefinite with `true`.
-    fn use_definite_hessian(&mut self, _on: bool) {}
+    /// every term when the total turns out indefinite with `true`. Returns whether the term
+    /// assembles anything different now (it has such pairs), so that the solver retries only
+    /// when a retry can help.
+    fn use_definite_hessian(&mut self, _on: bool) -> bool {
+        false
+    }
 
     /// Called once per step after the first assembly, with the total gradient (DOF space) at
     /// `state`: a term may re-scale itself to balance the others (contact raises its barrier

@@ -85,6 +85,9 @@ pub struct NewtonReport {
     pub projected: bool,
     /// Time per phase.
     pub times: PhaseTimes,
+    /// The force residual at each iterate, N (convergence order in tests; not logged).
+    #[serde(skip)]
+    pub residuals_n: Vec<f64>,
 }
 
 /// Why a Newton solve failed.
@@ -198,11 +201,52 @@ fn axpy_velocities(dofs: &DofMap, base: &[Vector3<f64>], step: &[f64], alpha: f6
     }
 }
 
+/// One of Newton's globalisation switches (the friction majoriser, the barriers' definite
+/// form), with its hysteresis: on far from the solution; off once a step is taken in full (the
+/// quadratic model is trusted there) and the residual is below where the switch was last forced
+/// on; on again after a step cut below a quarter (it jumped across a regime change).
+struct FarFromSolution {
+    on: bool,
+    /// Residual above which the switch stays on, N (infinite: no such bound).
+    hold_above_n: f64,
+}
+
+impl FarFromSolution {
+    fn new(on: bool) -> Self {
+        Self {
+            on,
+            hold_above_n: f64::INFINITY,
+        }
+    }
+
+    /// On, until a full step at a residual below `residual_n`.
+    fn hold_until_residual(&mut self, residual_n: f64) {
+        self.on = true;
+        self.hold_above_n = residual_n;
+    }
+
+    /// After a step of fraction `alpha` accepted at `residual_n`: whether the switch flipped.
+    fn after_step(&mut self, alpha: f64, residual_n: f64) -> bool {
+        let next = if self.on {
+            alpha < 1.0 || residual_n >= self.hold_above_n
+        } else {
+            alpha < 0.25
+        };
+        let flipped = next != self.on;
+        self.on = next;
+        flipped
+    }
+}
+
 /// Relative tolerance of CG preconditioned by the step's factorisation (tightening as
 /// `min(this, r/r₀)`: the Newton iterations keep converging as with exact directions).
 const REUSE_RELATIVE_TOLERANCE: f64 = 1e-3;
-/// CG iterations preconditioned by the step's factorisation before it is refreshed.
-const REUSE_MAX_CG: usize = 25;
+/// CG iterations preconditioned by the step's factorisation before it is refreshed. Each costs
+/// two triangular solves, which stream the whole factor; a factorisation costs about seven of
+/// them (17k unknowns, 3.3M factor entries: ~12 ms against ~87 ms), so beyond this a fresh
+/// factor is cheaper (with 25, a folded towel's solves spent 30% of the run in triangular
+/// solves, most in reuses that then failed).
+const REUSE_MAX_CG: usize = 8;
 
 /// Solve one step: on success `v` holds the end-of-step velocities.
 pub fn solve(
@@ -228,6 +272,7 @@ pub fn solve(
         min_step_fraction: 1.0,
         projected: settings.projection == Projection::Always,
         times: PhaseTimes::default(),
+        residuals_n: Vec::new(),
     };
 
     // Initial guess: the previous velocity, as far along it as is valid from rest (v = 0 keeps
@@ -266,24 +311,26 @@ pub fn solve(
     }
 
     // Far from the solution (until a step is taken in full) the majorising Hessians.
-    let mut majorizer = settings.majorizer_far_from_solution;
+    let mut majorizer = FarFromSolution::new(settings.majorizer_far_from_solution);
     for t in terms.iter_mut() {
-        t.use_majorizer_hessian(majorizer);
+        t.use_majorizer_hessian(majorizer.on);
     }
     // Likewise the positive semi-definite forms of the Hessians that are indefinite near their
-    // active set (contact barriers), and the residual below which their exact ones are tried
-    // (again), N.
-    let mut definite = settings.majorizer_far_from_solution;
-    let mut exact_barriers_below_n = f64::INFINITY;
+    // active set (contact barriers).
+    let mut definite = FarFromSolution::new(settings.majorizer_far_from_solution);
     for t in terms.iter_mut() {
-        t.use_definite_hessian(definite);
+        t.use_definite_hessian(definite.on);
     }
     // Diagnostics on stderr: one line per iteration, and which terms rose at a cut step.
     let trace = std::env::var_os("STARK_NEWTON_TRACE").is_some();
     let mut first_residual: Option<f64> = None;
     let mut rebalanced = false;
-    // A Cholesky factorisation of this step's Hessian exists (see the linear solve).
-    let mut factored_this_step = false;
+    // A Cholesky factorisation of this step's Hessian exists, made with the Hessian forms in use
+    // now (a switch of the majoriser, the barriers' form or projection changes the Hessian far
+    // more than an iteration does: a fresh factor then).
+    let mut factor_reusable = false;
+    // The last attempt to reuse it failed: the Hessian moves fast, factorise directly once.
+    let mut reuse_failed = false;
     // The step's Hessian pattern, and so the Cholesky ordering, depends on this step alone.
     ws.assembler.exact_pattern_next = true;
     // The assembly of the current iterate, when the line search already made it (a step
@@ -347,6 +394,7 @@ pub fn solve(
             report.residual_n = residual;
             report.iterations = iteration;
             if residual < settings.residual_tolerance_n {
+                report.residuals_n.push(residual);
                 if trace {
                     eprintln!("done it {iteration} res {residual:.3e}");
                 }
@@ -368,7 +416,7 @@ pub fn solve(
                 // few triangular solves instead of a factorisation, while the Hessian stays near
                 // the factorised one (a fresh factor when CG needs more; every step starts with a
                 // fresh one, so a run resumed at a step is the same run).
-                if iteration > 0 && factored_this_step {
+                if iteration > 0 && factor_reusable && !std::mem::take(&mut reuse_failed) {
                     let g_norm = dot(&ws.gradient, &ws.gradient).sqrt();
                     let eta = REUSE_RELATIVE_TOLERANCE.min(residual / r0);
                     let tol = (eta * g_norm).max(0.1 * settings.residual_tolerance_n * dt);
@@ -381,6 +429,7 @@ pub fn solve(
                         });
                     report.cg_iterations += info.iterations;
                     solved = info.converged && !info.indefinite;
+                    reuse_failed = !solved;
                 }
                 if !solved {
                     solved = ws
@@ -388,7 +437,7 @@ pub fn solve(
                         .solve(matrix, ws.assembler.pattern_id, &ws.rhs, &mut ws.step)
                         .is_ok();
                     indefinite = !solved;
-                    factored_this_step = solved;
+                    factor_reusable = solved;
                 }
             }
             // A failed factorisation of an unprojected Hessian means "project"; otherwise use CG.
@@ -404,17 +453,20 @@ pub fn solve(
             let usable = descent < 0.0 && ws.step.iter().all(|s| s.is_finite());
             report.times.linear_solve_s += t2.elapsed().as_secs_f64();
             if !project && (indefinite || !usable) {
-                if !definite {
-                    // The exact barrier Hessians make it indefinite here (their curvature is not
-                    // held by the inertia yet): back to their positive semi-definite form, and
-                    // the exact ones again once the residual fell tenfold from here (each failed
-                    // attempt costs an assembly and a solve).
-                    definite = true;
-                    exact_barriers_below_n = 0.1 * residual;
+                if !definite.on {
+                    // The exact barrier Hessians may make it indefinite here (their curvature is
+                    // not held by the inertia yet): back to their positive semi-definite form,
+                    // and the exact ones again once the residual fell tenfold from here (each
+                    // failed attempt costs an assembly and a solve). Only if some term has such
+                    // a form; otherwise the indefiniteness is another term's.
+                    definite.hold_until_residual(0.1 * residual);
+                    let mut changed = false;
                     for t in terms.iter_mut() {
-                        t.use_definite_hessian(true);
+                        changed |= t.use_definite_hessian(true);
                     }
-                    continue;
+                    if changed {
+                        continue;
+                    }
                 }
                 // The Hessian is not positive definite here: project from now on.
                 project = true;
@@ -432,6 +484,7 @@ pub fn solve(
                 }
                 descent = dot(&ws.gradient, &ws.step);
             }
+            report.residuals_n.push(residual);
             break;
         }
         let t_ccd = Instant::now();
@@ -563,30 +616,24 @@ pub fn solve(
             // A full step: the model is trusted here, the exact Hessians converge faster. An
             // exact step cut below a quarter jumped across a regime change (a sliding contact
             // that sticks at the solution): back to the majorisers.
-            let next = if majorizer { alpha < 1.0 } else { alpha < 0.25 };
-            if next != majorizer {
-                majorizer = next;
+            if majorizer.after_step(alpha, residual) {
+                factor_reusable = false;
                 for t in terms.iter_mut() {
-                    t.use_majorizer_hessian(majorizer);
+                    t.use_majorizer_hessian(majorizer.on);
                 }
             }
             // The barriers' exact Hessians likewise, once the residual is also below where they
             // last made the Hessian indefinite. Their definite (projected) form overestimates
             // the curvature that the other energies carry near the solution, and Newton would
             // converge only linearly (a folded towel under a robot: by 0.69 per iteration).
-            let next_definite = if definite {
-                alpha < 1.0 || residual >= exact_barriers_below_n
-            } else {
-                alpha < 0.25
-            };
-            if next_definite != definite {
-                definite = next_definite;
-                if !definite && settings.projection == Projection::OnDemand {
+            if definite.after_step(alpha, residual) {
+                factor_reusable = false;
+                if !definite.on && settings.projection == Projection::OnDemand {
                     // An indefinite Hessian far from here says little about here.
                     project = false;
                 }
                 for t in terms.iter_mut() {
-                    t.use_definite_hessian(definite);
+                    t.use_definite_hessian(definite.on);
                 }
             }
         }
@@ -594,7 +641,9 @@ pub fn solve(
             // Diagnostics: one line per iteration on stderr (the residual, the accepted step
             // fraction, the Hessians used, the DOF block of the step's largest entry).
             eprintln!(
-                "it {iteration:2} res {residual:.3e} alpha {alpha:.3e} maj {majorizer} def {definite} proj {project} ls {} cg {} step {:.3e} at {}",
+                "it {iteration:2} res {residual:.3e} alpha {alpha:.3e} maj {} def {} proj {project} ls {} cg {} step {:.3e} at {}",
+                majorizer.on,
+                definite.on,
                 report.line_search_evaluations,
                 report.cg_iterations,
                 norm_inf(&ws.step),

@@ -16,6 +16,7 @@ pub mod joints_hold_their_load;
 pub mod magnet_lifts_the_cubes;
 pub mod mesh_files_give_mass_properties;
 pub mod motor_lifts_and_stalls;
+pub mod newton_converges_quadratically_at_a_resting_contact;
 pub mod pendulum_period;
 pub mod quasistatic_stretch_converges;
 pub mod rb_point_chain_holds_its_joints;
