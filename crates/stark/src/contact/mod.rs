@@ -188,18 +188,15 @@ pub struct Contact {
     kappa: PairStiffness,
     /// Mean contact mass of each object (kg; 0: kinematic), set with the stiffness.
     object_masses_kg: Vec<f64>,
-    /// Smallest CCD fraction and exact CCD queries of the last line search (`max_step_fraction`
-    /// takes `&self`).
-    ccd_record: std::sync::Mutex<(f64, usize)>,
-    /// Candidates of the last line-search segment (set by `max_step_fraction`, which takes
-    /// `&self`).
-    candidate_cache: std::sync::Mutex<Option<Candidates>>,
+    /// Smallest CCD fraction and exact CCD queries of the last line search.
+    ccd_record: (f64, usize),
+    /// Candidates of the last line-search segment or detection (reused while they cover it).
+    candidate_cache: Option<Candidates>,
     /// Primitives of rigid bodies' meshes and of the other objects (set in `before_step`), for
     /// the intersection test of trial states.
     rigid_split: RigidSplit,
-    /// Intersection tests, rejections and their wall time in the current step
-    /// (`is_valid_state` takes `&self`).
-    validity_record: std::sync::Mutex<(usize, usize, f64)>,
+    /// Intersection tests, rejections and their wall time in the current step.
+    validity_record: (usize, usize, f64),
     version: u64,
     relag_pending: bool,
     lag_solves: usize,
@@ -230,10 +227,10 @@ impl Default for Contact {
             friction_elements: vec![],
             kappa: PairStiffness::default(),
             object_masses_kg: vec![],
-            ccd_record: std::sync::Mutex::new((1.0, 0)),
-            candidate_cache: std::sync::Mutex::new(None),
+            ccd_record: (1.0, 0),
+            candidate_cache: None,
             rigid_split: RigidSplit::default(),
-            validity_record: std::sync::Mutex::new((0, 0, 0.0)),
+            validity_record: (0, 0, 0.0),
             version: 0,
             relag_pending: false,
             lag_solves: 0,

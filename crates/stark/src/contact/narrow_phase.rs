@@ -50,10 +50,10 @@ impl Contact {
     /// Active pairs at positions `x`, from the cached candidates when they cover `x` (else a new
     /// broad phase, then cached).
     pub(super) fn detect(&mut self, x: &[Vector3<f64>]) -> Vec<ContactPair> {
-        let cached = self.candidate_cache.get_mut().expect("no poisoned lock").take();
+        let cached = self.candidate_cache.take();
         let candidates = self.candidates_for(cached, x, x);
         let pairs = self.narrow_phase(&candidates, x);
-        *self.candidate_cache.get_mut().expect("no poisoned lock") = Some(candidates);
+        self.candidate_cache = Some(candidates);
         pairs
     }
 

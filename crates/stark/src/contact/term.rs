@@ -191,9 +191,9 @@ impl EnergyTerm for Contact {
     }
     fn before_step(&mut self, state: &EvalState) {
         // Objects, thicknesses or enabled pairs may have changed since the last step.
-        *self.candidate_cache.get_mut().expect("no poisoned lock") = None;
+        self.candidate_cache = None;
         self.rigid_split = self.split_rigid(state);
-        *self.validity_record.get_mut().expect("no poisoned lock") = (0, 0, 0.0);
+        self.validity_record = (0, 0, 0.0);
         if self.relag_pending {
             self.relag_pending = false;
         } else {
@@ -227,28 +227,28 @@ impl EnergyTerm for Contact {
     fn rebalance(&mut self, state: &EvalState, gradient: &[f64]) -> bool {
         self.rebalance_stiffness(state, gradient)
     }
-    fn max_step_fraction(&self, from: &EvalState, to: &EvalState) -> f64 {
+    fn max_step_fraction(&mut self, from: &EvalState, to: &EvalState) -> f64 {
         if self.objects.is_empty() {
             return 1.0;
         }
-        let cached = self.candidate_cache.lock().expect("no poisoned lock").take();
+        let cached = self.candidate_cache.take();
         let candidates = self.candidates_for(cached, from.x, to.x);
         let (alpha, queries) = if self.settings.ccd {
             self.ccd_fraction(&candidates, from.x, to.x)
         } else {
             (1.0, 0)
         };
-        *self.candidate_cache.lock().expect("no poisoned lock") = Some(candidates);
-        *self.ccd_record.lock().expect("no poisoned lock") = (alpha, queries);
+        self.candidate_cache = Some(candidates);
+        self.ccd_record = (alpha, queries);
         alpha
     }
-    fn is_valid_state(&self, state: &EvalState) -> bool {
+    fn is_valid_state(&mut self, state: &EvalState) -> bool {
         if self.rigid_split.is_empty() {
             return true;
         }
         let t0 = std::time::Instant::now();
         let valid = !self.rigid_pairs_intersect(state.x);
-        let mut r = self.validity_record.lock().expect("no poisoned lock");
+        let r = &mut self.validity_record;
         r.0 += 1;
         r.1 += usize::from(!valid);
         r.2 += t0.elapsed().as_secs_f64();
@@ -294,10 +294,10 @@ impl EnergyTerm for Contact {
                 .stiffen(a as usize, b as usize, self.settings.max_stiffness_factor);
         }
         self.stats.stiffness = self.kappa.max();
-        let (fraction, queries) = *self.ccd_record.lock().expect("no poisoned lock");
+        let (fraction, queries) = self.ccd_record;
         self.stats.min_ccd_fraction = fraction;
         self.stats.ccd_queries = queries;
-        let (checks, rejected, seconds) = *self.validity_record.lock().expect("no poisoned lock");
+        let (checks, rejected, seconds) = self.validity_record;
         self.stats.validity_checks = checks;
         self.stats.invalid_trials = rejected;
         self.stats.validity_time_s = seconds;

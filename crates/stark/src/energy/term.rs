@@ -107,13 +107,13 @@ pub trait EnergyTerm: Send + Sync {
 
     /// Largest fraction `α ∈ (0, 1]` of the step `state → state + Δ` that is valid (CCD).
     /// `trial` is the state at the full step.
-    fn max_step_fraction(&self, _state: &EvalState, _trial: &EvalState) -> f64 {
+    fn max_step_fraction(&mut self, _state: &EvalState, _trial: &EvalState) -> f64 {
         1.0
     }
 
     /// Whether a line-search trial state is admissible. CCD checks straight chords; points of
     /// rigid bodies move on arcs, so contact also tests trial states for intersections.
-    fn is_valid_state(&self, _state: &EvalState) -> bool {
+    fn is_valid_state(&mut self, _state: &EvalState) -> bool {
         true
     }
 

@@ -187,8 +187,11 @@ fn total_energy(terms: &[&mut dyn EnergyTerm], state: &EvalState) -> f64 {
     terms.iter().map(|t| t.energy(state)).sum()
 }
 
-fn max_step(terms: &[&mut dyn EnergyTerm], from: &EvalState, to: &EvalState) -> f64 {
-    terms.iter().map(|t| t.max_step_fraction(from, to)).fold(1.0, f64::min)
+fn max_step(terms: &mut [&mut dyn EnergyTerm], from: &EvalState, to: &EvalState) -> f64 {
+    terms
+        .iter_mut()
+        .map(|t| t.max_step_fraction(from, to))
+        .fold(1.0, f64::min)
 }
 
 /// `out = base + alpha·step`: `step` is over the unknowns, `base` and `out` over all DOF blocks
@@ -301,7 +304,7 @@ pub fn solve(
             }
             problem.place(v, &mut ws.trial_x, &mut ws.trial_poses);
             let guess = problem.state(v, &ws.trial_x, &ws.trial_poses);
-            if terms.iter().all(|t| t.is_valid_state(&guess)) {
+            if terms.iter_mut().all(|t| t.is_valid_state(&guess)) {
                 break;
             }
             alpha *= 0.5;
@@ -533,7 +536,7 @@ pub fn solve(
             problem.place(&ws.trial_v, &mut ws.trial_x, &mut ws.trial_poses);
             {
                 let trial = problem.state(&ws.trial_v, &ws.trial_x, &ws.trial_poses);
-                if !terms.iter().all(|t| t.is_valid_state(&trial)) {
+                if !terms.iter_mut().all(|t| t.is_valid_state(&trial)) {
                     // A rigid point left its chord and crossed a surface (see `is_valid_state`).
                     report.line_search_evaluations += 1;
                     alpha *= 0.5;
@@ -728,7 +731,7 @@ mod tests {
                 out[4 + 4 * i] = 1.0;
             }
         }
-        fn is_valid_state(&self, state: &EvalState) -> bool {
+        fn is_valid_state(&mut self, state: &EvalState) -> bool {
             let ok = state.v[0].x <= self.limit;
             if !ok {
                 *self.rejected.lock().unwrap() += 1;
