@@ -106,6 +106,10 @@ impl Simulation {
         self.with(|s| s.deformables.attachments.max_gap_m(attachment.handle, &s.nodes.x))
     }
 
+    // -----------------------------------------------------------------------------------------
+    // Contact
+    // -----------------------------------------------------------------------------------------
+
     /// All contact objects, in creation order.
     fn contact_objects(&self) -> PyResult<Vec<ContactHandle>> {
         let n = self.get(|s| s.contact.objects().len())?;

@@ -95,6 +95,10 @@ impl Simulation {
         self.set_node_field(nodes, many, one, |s| &mut s.nodes.acceleration, "accelerations")
     }
 
+    // -----------------------------------------------------------------------------------------
+    // Deformable objects
+    // -----------------------------------------------------------------------------------------
+
     /// A shell or cloth from vertices (n, 3) and triangles (m, 3).
     fn add_surface(
         &self,
