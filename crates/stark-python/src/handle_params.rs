@@ -23,10 +23,15 @@ pub(crate) trait ParamsHandle:
 /// The library parameter struct of handle kind `H`.
 type Struct<H> = <<H as ParamsHandle>::Params as ParamClass>::Struct;
 
-/// `params` and `set_params` for one handle kind: None if the handle is of another kind.
+/// `params` of one handle kind: None if the handle is of another kind.
+type GetFn = for<'py> fn(&Simulation, &Bound<'py, PyAny>) -> Option<PyResult<Bound<'py, PyAny>>>;
+/// `set_params` of one handle kind: None if the handle is of another kind.
+type SetFn = fn(&Simulation, &Bound<'_, PyAny>, &Bound<'_, PyAny>) -> Option<PyResult<()>>;
+
+/// `params` and `set_params` for one handle kind.
 struct Kind {
-    get: for<'py> fn(&Simulation, &Bound<'py, PyAny>) -> Option<PyResult<Bound<'py, PyAny>>>,
-    set: fn(&Simulation, &Bound<'_, PyAny>, &Bound<'_, PyAny>) -> Option<PyResult<()>>,
+    get: GetFn,
+    set: SetFn,
 }
 
 const fn kind<H: ParamsHandle>() -> Kind {
