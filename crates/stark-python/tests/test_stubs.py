@@ -137,4 +137,7 @@ def test_parameter_class_docs_match_the_generated_stubs():
                 runtime = inspect.cleandoc(getattr(cls, a.target.id).__doc__)
                 assert runtime == inspect.cleandoc(b.value.value), f"{node.name}.{a.target.id}"
                 checked += 1
-    assert checked >= 30
+            elif isinstance(a, ast.FunctionDef) and not a.name.startswith("__") and ast.get_docstring(a):
+                assert inspect.cleandoc(getattr(cls, a.name).__doc__) == ast.get_docstring(a), a.name
+                checked += 1
+    assert checked >= 50
