@@ -6,7 +6,7 @@
 //! this extension module (`starkrs._starkrs`) and ships type stubs.
 //!
 //! Layout mirrors the library: `params.rs` (settings, parameters, materials; the parameter
-//! classes listed in `param_list.rs`, which `bin/gen_stubs.rs` renders into the stubs),
+//! classes listed in `param_list.rs`, which stark-codegen's `gen_stubs` renders into the stubs),
 //! `handles.rs`, `handle_params.rs` (`params`/`set_params` of every handle kind),
 //! `simulation.rs`, `rigid.rs`, `scene.rs`, `meshes.rs` and `geometry.rs`; `convert.rs` holds
 //! the NumPy and error conversions. `joints.rs` adds the joint, rigid-preset and

@@ -1,7 +1,7 @@
-//! The model parameter classes of the module, in the order of the type stubs. It is the one
-//! list the extension (`params.rs` defines a class per entry) and the stub generator
-//! (`bin/gen_stubs.rs`, which includes this file) share; the fields and their docs come from
-//! the library's tables (`stark::params`).
+//! The model parameter classes of the module, in the order of the type stubs: the one list the
+//! extension (`params.rs` defines a class per entry) and the stub generator
+//! (`stark-codegen/src/bin/gen_stubs.rs`, which includes this file) share. The fields and their
+//! docs come from the library's tables (`stark::params`).
 
 /// Calls `$m! { PythonName => RustStruct, ... }` with every parameter class.
 macro_rules! param_classes {

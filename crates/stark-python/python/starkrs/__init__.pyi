@@ -170,7 +170,7 @@ class ContactSettings:
     def __copy__(self) -> ContactSettings: ...
     def __deepcopy__(self, memo: Any) -> ContactSettings: ...
 
-# <generated> Parameter classes, from the library's field tables: `cargo run -p stark-python --bin gen_stubs`.
+# <generated> Parameter classes, from the library's field tables: `cargo run -p stark-codegen --bin gen_stubs`.
 
 @final
 class InertiaParams:

@@ -1,22 +1,26 @@
-//! Writes the generated part of the type stubs `python/starkrs/__init__.pyi`: the model
-//! parameter classes, rendered from the library's field tables (`stark::params`), between the
-//! `BEGIN` and `END` marker lines; the rest of the file is written by hand.
+//! Writes the generated part of the Python type stubs `stark-python/python/starkrs/__init__.pyi`:
+//! the model parameter classes, rendered from the library's field tables (`stark::params`),
+//! between the `BEGIN` and `END` marker lines; the rest of the file is written by hand.
 //!
-//! `cargo run -p stark-python --bin gen_stubs` rewrites the section; its test (run by
-//! `cargo test --workspace`) fails when the committed stubs differ from the tables.
+//! `cargo run -p stark-codegen --bin gen_stubs` rewrites the section; its test (run by
+//! `cargo test --workspace`) fails when the committed stubs differ from the tables. It lives
+//! here, not in stark-python, so that the test needs no build of the extension (PyO3).
 
 use stark::params::{doc_text, FieldKind, ParamFields};
 use std::fmt::Write;
 use std::process::ExitCode;
 
-#[path = "../param_list.rs"]
+#[path = "../../../stark-python/src/param_list.rs"]
 mod param_list;
 
 /// The stub file, from the crate directory.
-const PYI: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/python/starkrs/__init__.pyi");
+const PYI: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../stark-python/python/starkrs/__init__.pyi"
+);
 /// The line opening the generated section.
 const BEGIN: &str =
-    "# <generated> Parameter classes, from the library's field tables: `cargo run -p stark-python --bin gen_stubs`.";
+    "# <generated> Parameter classes, from the library's field tables: `cargo run -p stark-codegen --bin gen_stubs`.";
 /// The line closing it.
 const END: &str = "# </generated>";
 
@@ -130,7 +134,7 @@ mod tests {
         let expected = splice(&pyi).unwrap();
         assert!(
             pyi == expected,
-            "the parameter classes in {PYI} differ from the library's field tables; regenerate them with `cargo run -p stark-python --bin gen_stubs`"
+            "the parameter classes in {PYI} differ from the library's field tables; regenerate them with `cargo run -p stark-codegen --bin gen_stubs`"
         );
     }
 
