@@ -5,7 +5,9 @@
 //! toolkit, with NumPy arrays in and out. The Python package `starkrs` (in `python/`) re-exports
 //! this extension module (`starkrs._starkrs`) and ships type stubs.
 //!
-//! Layout mirrors the library: `params.rs` (settings, parameters, materials), `handles.rs`,
+//! Layout mirrors the library: `params.rs` (settings, parameters, materials; the parameter
+//! classes listed in `param_list.rs`, which stark-codegen's `gen_stubs` renders into the stubs),
+//! `handles.rs`, `handle_params.rs` (`params`/`set_params` of every handle kind),
 //! `simulation.rs`, `rigid.rs`, `scene.rs`, `meshes.rs` and `geometry.rs`; `convert.rs` holds
 //! the NumPy and error conversions. `joints.rs` adds the joint, rigid-preset and
 //! deformable–rigid attachment methods to `Simulation` (`add_hinge_joint`, `add_box`,
@@ -13,9 +15,11 @@
 
 mod convert;
 mod geometry;
+mod handle_params;
 mod handles;
 mod joints;
 mod meshes;
+mod param_list;
 mod params;
 mod rigid;
 mod robots;

@@ -6,13 +6,22 @@
 //! so `material.strain.youngs_modulus = 1e4` changes the material. Values are checked when they
 //! enter a simulation (`Simulation(settings)`, `add_surface`, `set_params`), with the library's
 //! messages.
+//!
+//! Settings and materials are mirror classes (`mirror!`: a copy of each field). The model
+//! parameter classes (`InertiaParams`, `TetStrainParams`, ...) wrap the library struct and take
+//! their attributes and docs from its field table (`stark::params`), so they are spelled only in
+//! the library; `param_list.rs` names them.
 
 use crate::convert::{stark_err, Arr3};
 use pyo3::exceptions::{PyAttributeError, PyTypeError, PyValueError};
+use pyo3::panic::PanicException;
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyString};
+use pyo3::types::{PyBool, PyDict, PyFloat, PyString, PyType};
 use serde::de::DeserializeOwned;
 use serde::Serialize;
+use stark::params::{doc_text, FieldDoc, FieldKind, FieldValue, ParamFields};
+use std::ffi::{c_int, c_void, CString};
+use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::PathBuf;
 
 /// A Python class that mirrors a Rust struct.
@@ -316,140 +325,224 @@ impl Settings {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Energy parameters
+// Model parameters: one class per library struct, its attributes made from the struct's field
+// table (`stark::params`), so fields and their docs are written once, in the library.
 // ---------------------------------------------------------------------------------------------
 
-mirror! {
-    /// Lumped inertia of a deformable object.
-    InertiaParams => stark::deformables::InertiaParams {
-        /// Density per unit length, area or volume: kg/m, kg/m² or kg/m³ (default: 1).
-        density: f64,
-        /// Inertial damping, 1/s: a drag force −m·d·v (default: 0).
-        damping: f64,
-        /// Drop the kinetic terms: each step solves for static equilibrium (default: False).
-        quasistatic: bool,
+/// A Python class wrapping a library parameter struct.
+pub trait ParamClass: pyo3::PyClass<Frozen = pyo3::pyclass::boolean_struct::False> {
+    /// The library struct.
+    type Struct: ParamFields;
+    /// The struct.
+    fn inner(&self) -> &Self::Struct;
+    /// The struct, to change.
+    fn inner_mut(&mut self) -> &mut Self::Struct;
+    /// A new Python object holding `p`.
+    fn new_object(py: Python<'_>, p: Self::Struct) -> PyResult<Bound<'_, PyAny>>;
+}
+
+/// Defines the parameter classes of `param_list.rs` and `register_param_classes`.
+macro_rules! define_param_classes {
+    ($($name:ident => $rust:path),* $(,)?) => {
+        $(
+            #[pyclass(module = "starkrs")]
+            pub struct $name(pub $rust);
+
+            impl ParamClass for $name {
+                type Struct = $rust;
+                fn inner(&self) -> &$rust {
+                    &self.0
+                }
+                fn inner_mut(&mut self) -> &mut $rust {
+                    &mut self.0
+                }
+                fn new_object(py: Python<'_>, p: $rust) -> PyResult<Bound<'_, PyAny>> {
+                    Ok(Bound::new(py, Self(p))?.into_any())
+                }
+            }
+
+            impl Mirror for $name {
+                type Rust = $rust;
+                fn from_rust(_py: Python<'_>, r: &$rust) -> PyResult<Self> {
+                    Ok(Self(r.clone()))
+                }
+                fn to_rust(&self, _py: Python<'_>) -> PyResult<$rust> {
+                    Ok(self.0.clone())
+                }
+            }
+
+            #[pymethods]
+            impl $name {
+                /// Defaults of the library, with the given fields replaced.
+                #[new]
+                #[pyo3(signature = (**fields))]
+                fn py_new(fields: Option<&Bound<'_, PyDict>>) -> PyResult<Self> {
+                    let mut me = Self(Default::default());
+                    set_fields(&mut me.0, stringify!($name), fields)?;
+                    Ok(me)
+                }
+
+                fn __repr__(slf: &Bound<'_, Self>) -> PyResult<String> {
+                    param_repr::<$rust>(stringify!($name), slf.as_any())
+                }
+
+                fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
+                    other.cast::<Self>().is_ok_and(|o| o.borrow().0 == self.0)
+                }
+
+                /// The fields as a plain dict (nested settings as nested dicts).
+                fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+                    $crate::convert::to_python(py, &self.0)
+                }
+
+                /// A deep copy (nested settings are copied too).
+                fn copy(&self) -> Self {
+                    Self(self.0.clone())
+                }
+
+                fn __copy__(&self) -> Self {
+                    self.copy()
+                }
+
+                fn __deepcopy__(&self, _memo: &Bound<'_, PyAny>) -> Self {
+                    self.copy()
+                }
+            }
+        )*
+
+        /// Register the parameter classes, with their fields and docs from the tables.
+        fn register_param_classes(m: &Bound<'_, PyModule>) -> PyResult<()> {
+            $(
+                m.add_class::<$name>()?;
+                install_fields::<$name>(&m.py().get_type::<$name>())?;
+            )*
+            Ok(())
+        }
+    };
+}
+crate::param_list::param_classes!(define_param_classes);
+
+/// Set the keyword arguments of a constructor; an unknown name raises `AttributeError`.
+fn set_fields<P: ParamFields>(p: &mut P, class: &str, fields: Option<&Bound<'_, PyDict>>) -> PyResult<()> {
+    for (k, v) in fields.into_iter().flat_map(|d| d.iter()) {
+        let k: String = k.extract()?;
+        let Some(field) = P::FIELDS.iter().find(|f| f.name == k) else {
+            let names: Vec<_> = P::FIELDS.iter().map(|f| f.name).collect();
+            return Err(PyAttributeError::new_err(format!(
+                "{class} has no field '{k}' (fields: {})",
+                names.join(", ")
+            )));
+        };
+        p.set(field.name, field_from_py(field, &v)?)
+            .map_err(crate::convert::to_py_err)?;
+    }
+    Ok(())
+}
+
+/// `Name(field=value, ...)` with the values' Python reprs.
+fn param_repr<P: ParamFields>(class: &str, slf: &Bound<'_, PyAny>) -> PyResult<String> {
+    let mut parts = Vec::new();
+    for f in P::FIELDS {
+        parts.push(format!("{}={}", f.name, slf.getattr(f.name)?.repr()?));
+    }
+    Ok(format!("{class}({})", parts.join(", ")))
+}
+
+/// A Python value as a field of kind `field.kind` (`TypeError` if it is not one).
+fn field_from_py(field: &FieldDoc, v: &Bound<'_, PyAny>) -> PyResult<FieldValue> {
+    Ok(match field.kind {
+        FieldKind::Float => FieldValue::Float(v.extract()?),
+        FieldKind::Bool => FieldValue::Bool(v.extract()?),
+    })
+}
+
+/// A field value as a Python object.
+fn field_to_py(py: Python<'_>, v: FieldValue) -> Bound<'_, PyAny> {
+    match v {
+        FieldValue::Float(x) => PyFloat::new(py, x).into_any(),
+        FieldValue::Bool(b) => PyBool::new(py, b).to_owned().into_any(),
     }
 }
 
-mirror! {
-    /// Membrane strain of a shell or cloth (Neo-Hookean triangles with strain limiting).
-    TriangleStrainParams => stark::deformables::TriangleStrainParams {
-        /// Shell thickness, m.
-        thickness_m: f64,
-        /// Young's modulus, Pa.
-        youngs_modulus: f64,
-        /// Poisson's ratio.
-        poissons_ratio: f64,
-        /// Strain-rate damping, Pa·s.
-        damping: f64,
-        /// Largest principal strain before the limiting penalty starts (inf: off).
-        strain_limit: f64,
-        /// Stiffness of the strain-limiting penalty, Pa.
-        strain_limit_stiffness: f64,
-        /// Inflation pressure, Pa.
-        inflation_pa: f64,
-        /// Factor on the whole energy.
-        scale: f64,
+/// Give class `C` its docstring and a getset descriptor per field of its table (the attribute
+/// kind `#[pyo3(get, set)]` makes), with the field's doc.
+fn install_fields<C: ParamClass>(ty: &Bound<'_, PyType>) -> PyResult<()> {
+    ty.setattr("__doc__", doc_text(C::Struct::DOC))?;
+    for (i, f) in C::Struct::FIELDS.iter().enumerate() {
+        // CPython keeps pointers to the definition and its strings for as long as the descriptor
+        // lives, which is as long as the class: leaked, once per field when the module loads.
+        let def = Box::leak(Box::new(pyo3::ffi::PyGetSetDef {
+            name: CString::new(f.name)?.into_raw(),
+            get: Some(get_field::<C>),
+            set: Some(set_field::<C>),
+            doc: CString::new(f.doc_text())?.into_raw(),
+            closure: i as *mut c_void,
+        }));
+        // SAFETY: `ty` is a live type object and `def` is never freed.
+        let descr =
+            unsafe { Bound::from_owned_ptr_or_err(ty.py(), pyo3::ffi::PyDescr_NewGetSet(ty.as_type_ptr(), def)) }?;
+        ty.setattr(f.name, descr)?;
+    }
+    Ok(())
+}
+
+/// Run a getter or setter body: its error, or a panic as `PanicException`, is raised in Python.
+fn descriptor_call<T>(py: Python<'_>, failed: T, body: impl FnOnce() -> PyResult<T>) -> T {
+    match catch_unwind(AssertUnwindSafe(body)) {
+        Ok(Ok(v)) => v,
+        Ok(Err(e)) => {
+            e.restore(py);
+            failed
+        }
+        Err(_) => {
+            PanicException::new_err("panic in a parameter attribute").restore(py);
+            failed
+        }
     }
 }
 
-mirror! {
-    /// Volumetric strain of a solid (Stable Neo-Hookean tets with strain limiting).
-    TetStrainParams => stark::deformables::TetStrainParams {
-        /// Young's modulus, Pa.
-        youngs_modulus: f64,
-        /// Poisson's ratio.
-        poissons_ratio: f64,
-        /// Strain-rate damping, Pa·s.
-        damping: f64,
-        /// Largest principal strain before the limiting penalty starts (inf: off).
-        strain_limit: f64,
-        /// Stiffness of the strain-limiting penalty, Pa.
-        strain_limit_stiffness: f64,
-        /// Factor on the whole energy.
-        scale: f64,
-    }
+/// The getter of field number `closure` of class `C`.
+unsafe extern "C" fn get_field<C: ParamClass>(
+    slf: *mut pyo3::ffi::PyObject,
+    closure: *mut c_void,
+) -> *mut pyo3::ffi::PyObject {
+    // SAFETY: CPython calls a getter with the GIL held and `slf` an instance of the class the
+    // descriptor was made for (it checks the type first).
+    let py = unsafe { Python::assume_attached() };
+    descriptor_call(py, std::ptr::null_mut(), || {
+        let slf = unsafe { Bound::from_borrowed_ptr(py, slf) };
+        let obj = slf.cast::<C>()?;
+        let field = &C::Struct::FIELDS[closure as usize];
+        let value = obj.try_borrow()?.inner().get(field.name).expect("a field of the table");
+        Ok(field_to_py(py, value).into_ptr())
+    })
 }
 
-mirror! {
-    /// Axial strain of a rod or cable made of segments.
-    SegmentStrainParams => stark::deformables::SegmentStrainParams {
-        /// Radius of the cross-section, m.
-        section_radius_m: f64,
-        /// Young's modulus, Pa.
-        youngs_modulus: f64,
-        /// Strain-rate damping, Pa·s.
-        damping: f64,
-        /// Largest strain before the limiting penalty starts (inf: off).
-        strain_limit: f64,
-        /// Stiffness of the strain-limiting penalty, Pa.
-        strain_limit_stiffness: f64,
-        /// Factor on the whole energy.
-        scale: f64,
-    }
-}
-
-mirror! {
-    /// Quadratic bending towards the flat state (cloth).
-    FlatBendingParams => stark::deformables::FlatBendingParams {
-        /// Bending stiffness, N·m.
-        stiffness: f64,
-        /// Bending damping, N·m·s.
-        damping: f64,
-    }
-}
-
-mirror! {
-    /// Discrete-shell bending towards the rest dihedral angles (curved shells).
-    DihedralBendingParams => stark::deformables::DihedralBendingParams {
-        /// Bending stiffness, N·m.
-        stiffness: f64,
-        /// Bending damping, N·m·s.
-        damping: f64,
-    }
-}
-
-mirror! {
-    /// Prescribed positions: nodes pulled to targets by stiff springs hardened to a tolerance.
-    PrescribedParams => stark::deformables::PrescribedParams {
-        /// Spring stiffness, N/m.
-        stiffness: f64,
-        /// Largest allowed distance to the target after a step, m (inf: no hardening).
-        tolerance_m: f64,
-    }
-}
-
-mirror! {
-    /// Attachments between deformable objects: stiff springs hardened to a tolerance.
-    AttachmentParams => stark::deformables::AttachmentParams {
-        /// Spring stiffness, N/m (default: 1e3).
-        stiffness: f64,
-        /// Largest allowed gap after a step, m (default: inf, no hardening).
-        tolerance_m: f64,
-    }
-}
-
-mirror! {
-    /// Damping of a rigid body.
-    RigidBodyParams => stark::rigidbodies::RigidBodyParams {
-        /// Linear velocity damping, 1/s (default: 0).
-        linear_damping_1_s: f64,
-        /// Angular velocity damping, 1/s (default: 0).
-        angular_damping_1_s: f64,
-    }
-}
-
-mirror! {
-    /// Parameters common to the composite joints: the penalty stiffness of their hard
-    /// constraints and the tolerances they are hardened to.
-    JointParams => stark::rigidbodies::joints::JointParams {
-        /// Stiffness of the hard constraints, N/m (default: 1e6).
-        stiffness: f64,
-        /// Tolerance of the point constraints, m (default: 1e-3).
-        tolerance_m: f64,
-        /// Tolerance of the direction constraints, degrees (default: 1).
-        tolerance_deg: f64,
-    }
+/// The setter of field number `closure` of class `C`.
+unsafe extern "C" fn set_field<C: ParamClass>(
+    slf: *mut pyo3::ffi::PyObject,
+    value: *mut pyo3::ffi::PyObject,
+    closure: *mut c_void,
+) -> c_int {
+    // SAFETY: as in `get_field`; `value` is null for `del`.
+    let py = unsafe { Python::assume_attached() };
+    descriptor_call(py, -1, || {
+        let slf = unsafe { Bound::from_borrowed_ptr(py, slf) };
+        let obj = slf.cast::<C>()?;
+        let field = &C::Struct::FIELDS[closure as usize];
+        if value.is_null() {
+            return Err(PyAttributeError::new_err(format!(
+                "can't delete attribute '{}'",
+                field.name
+            )));
+        }
+        let v = field_from_py(field, unsafe { &Bound::from_borrowed_ptr(py, value) })?;
+        obj.try_borrow_mut()?
+            .inner_mut()
+            .set(field.name, v)
+            .map_err(crate::convert::to_py_err)?;
+        Ok(0)
+    })
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -605,16 +698,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<NewtonSettings>()?;
     m.add_class::<OutputSettings>()?;
     m.add_class::<ContactSettings>()?;
-    m.add_class::<InertiaParams>()?;
-    m.add_class::<TriangleStrainParams>()?;
-    m.add_class::<TetStrainParams>()?;
-    m.add_class::<SegmentStrainParams>()?;
-    m.add_class::<FlatBendingParams>()?;
-    m.add_class::<DihedralBendingParams>()?;
-    m.add_class::<PrescribedParams>()?;
-    m.add_class::<AttachmentParams>()?;
-    m.add_class::<RigidBodyParams>()?;
-    m.add_class::<JointParams>()?;
+    register_param_classes(m)?;
     m.add_class::<LineMaterial>()?;
     m.add_class::<VolumeMaterial>()?;
     m.add_class::<SurfaceMaterial>()?;

@@ -117,3 +117,27 @@ def test_everything_public_has_a_docstring():
             if not (getattr(module, name).__doc__ or "").strip():
                 missing.append(f"{module.__name__}.{name}")
     assert missing == []
+
+
+def test_parameter_class_docs_match_the_generated_stubs():
+    # The parameter classes and their section of the stub (`gen_stubs`) are both made from the
+    # library's field tables; this checks the extension and the committed stub agree.
+    text = (PACKAGE / "__init__.pyi").read_text()
+    section = ast.parse(text[text.index("# <generated>"):text.index("# </generated>")])
+    checked = 0
+    for node in section.body:
+        if not isinstance(node, ast.ClassDef):
+            continue
+        cls = getattr(_starkrs, node.name)
+        assert inspect.cleandoc(cls.__doc__) == ast.get_docstring(node), node.name
+        fields = [a.target.id for a in node.body if isinstance(a, ast.AnnAssign)]
+        assert set(fields) == set(cls().to_dict()), node.name
+        for a, b in zip(node.body, node.body[1:]):
+            if isinstance(a, ast.AnnAssign) and isinstance(b, ast.Expr):
+                runtime = inspect.cleandoc(getattr(cls, a.target.id).__doc__)
+                assert runtime == inspect.cleandoc(b.value.value), f"{node.name}.{a.target.id}"
+                checked += 1
+            elif isinstance(a, ast.FunctionDef) and not a.name.startswith("__") and ast.get_docstring(a):
+                assert inspect.cleandoc(getattr(cls, a.name).__doc__) == ast.get_docstring(a), a.name
+                checked += 1
+    assert checked >= 50

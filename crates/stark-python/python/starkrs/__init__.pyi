@@ -170,15 +170,18 @@ class ContactSettings:
     def __copy__(self) -> ContactSettings: ...
     def __deepcopy__(self, memo: Any) -> ContactSettings: ...
 
+# <generated> Parameter classes, from the library's field tables: `cargo run -p stark-codegen --bin gen_stubs`.
+
 @final
 class InertiaParams:
     """Lumped inertia of a deformable object."""
     density: float
-    """Density per unit length, area or volume: kg/m, kg/m² or kg/m³ (default: 1)."""
+    """Density per unit length, area or volume of the elements the mass is lumped from: kg/m,
+    kg/m² or kg/m³ (default: 1)."""
     damping: float
-    """Inertial damping, 1/s: a drag force −m·d·v (default: 0)."""
+    """Inertial damping `d`, 1/s: a drag force `−m d v` (default: 0)."""
     quasistatic: bool
-    """Drop the kinetic terms: each step solves for static equilibrium (default: False)."""
+    """Drop the kinetic terms: each step solves for static equilibrium (default: false)."""
     def __new__(cls, *, density: float = ..., damping: float = ..., quasistatic: bool = ...) -> InertiaParams:
         """Defaults of the library, with the given fields replaced."""
     def to_dict(self) -> dict[str, Any]:
@@ -192,21 +195,21 @@ class InertiaParams:
 class TriangleStrainParams:
     """Membrane strain of a shell or cloth (Neo-Hookean triangles with strain limiting)."""
     thickness_m: float
-    """Shell thickness, m."""
+    """Shell thickness, m (default: 1e-3)."""
     youngs_modulus: float
-    """Young's modulus, Pa."""
+    """Young's modulus, Pa (default: 1e3)."""
     poissons_ratio: float
-    """Poisson's ratio."""
+    """Poisson's ratio, unitless in (0, 0.5) (default: 0.3)."""
     damping: float
-    """Strain-rate damping, Pa·s."""
+    """Strain-rate damping coefficient `c`, Pa·s (default: 0)."""
     strain_limit: float
-    """Largest principal strain before the limiting penalty starts (inf: off)."""
+    """Principal Green strain above which strain limiting acts, unitless (default: ∞, off)."""
     strain_limit_stiffness: float
-    """Stiffness of the strain-limiting penalty, Pa."""
+    """Stiffness of the strain-limiting penalty, Pa (default: 1e3)."""
     inflation_pa: float
-    """Inflation pressure, Pa."""
+    """Inflation pressure, Pa, along the triangle normal `(x₁ − x₀) × (x₂ − x₀)` (default: 0)."""
     scale: float
-    """Factor on the whole energy."""
+    """Uniform scale of the rest shape, unitless (default: 1)."""
     def __new__(cls, *, thickness_m: float = ..., youngs_modulus: float = ..., poissons_ratio: float = ..., damping: float = ..., strain_limit: float = ..., strain_limit_stiffness: float = ..., inflation_pa: float = ..., scale: float = ...) -> TriangleStrainParams:
         """Defaults of the library, with the given fields replaced."""
     def to_dict(self) -> dict[str, Any]:
@@ -220,17 +223,17 @@ class TriangleStrainParams:
 class TetStrainParams:
     """Volumetric strain of a solid (Stable Neo-Hookean tets with strain limiting)."""
     youngs_modulus: float
-    """Young's modulus, Pa."""
+    """Young's modulus, Pa (default: 1e3)."""
     poissons_ratio: float
-    """Poisson's ratio."""
+    """Poisson's ratio, unitless in (0, 0.5) (default: 0.3)."""
     damping: float
-    """Strain-rate damping, Pa·s."""
+    """Strain-rate damping coefficient `c`, Pa·s (default: 0)."""
     strain_limit: float
-    """Largest principal strain before the limiting penalty starts (inf: off)."""
+    """Green strain above which the strain-limiting penalty acts, unitless (default: ∞, off)."""
     strain_limit_stiffness: float
-    """Stiffness of the strain-limiting penalty, Pa."""
+    """Stiffness of the strain-limiting penalty, Pa (default: 1e3)."""
     scale: float
-    """Factor on the whole energy."""
+    """Uniform scale of the rest shape (growth or shrinkage), unitless (default: 1)."""
     def __new__(cls, *, youngs_modulus: float = ..., poissons_ratio: float = ..., damping: float = ..., strain_limit: float = ..., strain_limit_stiffness: float = ..., scale: float = ...) -> TetStrainParams:
         """Defaults of the library, with the given fields replaced."""
     def to_dict(self) -> dict[str, Any]:
@@ -244,17 +247,17 @@ class TetStrainParams:
 class SegmentStrainParams:
     """Axial strain of a rod or cable made of segments."""
     section_radius_m: float
-    """Radius of the cross-section, m."""
+    """Radius of the circular cross-section, m (default: 5e-3)."""
     youngs_modulus: float
-    """Young's modulus, Pa."""
+    """Young's modulus, Pa (default: 1e3)."""
     damping: float
-    """Strain-rate damping, Pa·s."""
+    """Strain-rate damping coefficient `c`, Pa·s (default: 0)."""
     strain_limit: float
-    """Largest strain before the limiting penalty starts (inf: off)."""
+    """Strain above which strain limiting acts, unitless (default: ∞, off)."""
     strain_limit_stiffness: float
-    """Stiffness of the strain-limiting penalty, Pa."""
+    """Stiffness of the strain-limiting penalty, Pa (default: 1e3)."""
     scale: float
-    """Factor on the whole energy."""
+    """Uniform scale of the rest length, unitless (default: 1)."""
     def __new__(cls, *, section_radius_m: float = ..., youngs_modulus: float = ..., damping: float = ..., strain_limit: float = ..., strain_limit_stiffness: float = ..., scale: float = ...) -> SegmentStrainParams:
         """Defaults of the library, with the given fields replaced."""
     def to_dict(self) -> dict[str, Any]:
@@ -268,9 +271,9 @@ class SegmentStrainParams:
 class FlatBendingParams:
     """Quadratic bending towards the flat state (cloth)."""
     stiffness: float
-    """Bending stiffness, N·m."""
+    """Bending stiffness `k`, N·m (default: 1e-6)."""
     damping: float
-    """Bending damping, N·m·s."""
+    """Bending damping `c`, N·m·s (default: 0)."""
     def __new__(cls, *, stiffness: float = ..., damping: float = ...) -> FlatBendingParams:
         """Defaults of the library, with the given fields replaced."""
     def to_dict(self) -> dict[str, Any]:
@@ -284,9 +287,9 @@ class FlatBendingParams:
 class DihedralBendingParams:
     """Discrete-shell bending towards the rest dihedral angles (curved shells)."""
     stiffness: float
-    """Bending stiffness, N·m."""
+    """Bending stiffness `k`, N·m (default: 1e-6)."""
     damping: float
-    """Bending damping, N·m·s."""
+    """Bending damping `c`, N·m·s (default: 0)."""
     def __new__(cls, *, stiffness: float = ..., damping: float = ...) -> DihedralBendingParams:
         """Defaults of the library, with the given fields replaced."""
     def to_dict(self) -> dict[str, Any]:
@@ -300,9 +303,10 @@ class DihedralBendingParams:
 class PrescribedParams:
     """Prescribed positions: nodes pulled to targets by stiff springs hardened to a tolerance."""
     stiffness: float
-    """Spring stiffness, N/m."""
+    """Spring stiffness `k`, N/m (default: 1e3)."""
     tolerance_m: float
-    """Largest allowed distance to the target after a step, m (inf: no hardening)."""
+    """Largest allowed distance to the target after a step, m; exceeding it doubles the stiffness
+    and repeats the step (default: ∞, no hardening)."""
     def __new__(cls, *, stiffness: float = ..., tolerance_m: float = ...) -> PrescribedParams:
         """Defaults of the library, with the given fields replaced."""
     def to_dict(self) -> dict[str, Any]:
@@ -316,9 +320,10 @@ class PrescribedParams:
 class AttachmentParams:
     """Attachments between deformable objects: stiff springs hardened to a tolerance."""
     stiffness: float
-    """Spring stiffness, N/m (default: 1e3)."""
+    """Spring stiffness `k`, N/m (default: 1e3)."""
     tolerance_m: float
-    """Largest allowed gap after a step, m (default: inf, no hardening)."""
+    """Largest allowed gap after a step, m; exceeding it doubles the stiffness and repeats the
+    step (default: ∞, no hardening)."""
     def __new__(cls, *, stiffness: float = ..., tolerance_m: float = ...) -> AttachmentParams:
         """Defaults of the library, with the given fields replaced."""
     def to_dict(self) -> dict[str, Any]:
@@ -332,7 +337,7 @@ class AttachmentParams:
 class RigidBodyParams:
     """Damping of a rigid body."""
     linear_damping_1_s: float
-    """Linear velocity damping, 1/s (default: 0)."""
+    """Linear velocity damping ("drag"), 1/s (default: 0)."""
     angular_damping_1_s: float
     """Angular velocity damping, 1/s (default: 0)."""
     def __new__(cls, *, linear_damping_1_s: float = ..., angular_damping_1_s: float = ...) -> RigidBodyParams:
@@ -349,11 +354,11 @@ class JointParams:
     """Parameters common to the composite joints: the penalty stiffness of their hard
     constraints and the tolerances they are hardened to."""
     stiffness: float
-    """Stiffness of the hard constraints, N/m (default: 1e6)."""
+    """Stiffness of the hard primitives, N/m (default: 1e6)."""
     tolerance_m: float
-    """Tolerance of the point constraints, m (default: 1e-3)."""
+    """Tolerance of the point primitives, m (default: 1e-3)."""
     tolerance_deg: float
-    """Tolerance of the direction constraints, degrees (default: 1)."""
+    """Tolerance of the direction primitives, degrees (default: 1)."""
     def __new__(cls, *, stiffness: float = ..., tolerance_m: float = ..., tolerance_deg: float = ...) -> JointParams:
         """Defaults of the library, with the given fields replaced."""
     def to_dict(self) -> dict[str, Any]:
@@ -362,6 +367,8 @@ class JointParams:
         """A deep copy (nested settings are copied too)."""
     def __copy__(self) -> JointParams: ...
     def __deepcopy__(self, memo: Any) -> JointParams: ...
+
+# </generated>
 
 @final
 class LineMaterial:

@@ -15,15 +15,17 @@ use crate::generated;
 use crate::state::EvalState;
 use serde::{Deserialize, Serialize};
 
-/// Parameters of a group of attachments.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct AttachmentParams {
-    /// Spring stiffness `k`, N/m (default: 1e3).
-    pub stiffness: f64,
-    /// Largest allowed gap after a step, m; exceeding it doubles the stiffness and repeats the
-    /// step (default: ∞, no hardening).
-    pub tolerance_m: f64,
+crate::params::param_struct! {
+    /// Attachments between deformable objects: stiff springs hardened to a tolerance.
+    #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+    #[serde(default, deny_unknown_fields)]
+    pub struct AttachmentParams {
+        /// Spring stiffness `k`, N/m (default: 1e3).
+        pub stiffness: f64,
+        /// Largest allowed gap after a step, m; exceeding it doubles the stiffness and repeats the
+        /// step (default: ∞, no hardening).
+        pub tolerance_m: f64,
+    }
 }
 
 impl Default for AttachmentParams {

@@ -17,14 +17,16 @@ use crate::state::NodeArrays;
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
-/// Parameters of discrete-shell bending.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct DihedralBendingParams {
-    /// Bending stiffness `k`, N·m (default: 1e-6).
-    pub stiffness: f64,
-    /// Bending damping `c`, N·m·s (default: 0).
-    pub damping: f64,
+crate::params::param_struct! {
+    /// Discrete-shell bending towards the rest dihedral angles (curved shells).
+    #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+    #[serde(default, deny_unknown_fields)]
+    pub struct DihedralBendingParams {
+        /// Bending stiffness `k`, N·m (default: 1e-6).
+        pub stiffness: f64,
+        /// Bending damping `c`, N·m·s (default: 0).
+        pub damping: f64,
+    }
 }
 
 impl Default for DihedralBendingParams {

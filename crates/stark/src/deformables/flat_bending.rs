@@ -18,14 +18,16 @@ use crate::state::NodeArrays;
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
-/// Parameters of flat bending.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct FlatBendingParams {
-    /// Bending stiffness `k`, N·m (default: 1e-6).
-    pub stiffness: f64,
-    /// Bending damping `c`, N·m·s (default: 0).
-    pub damping: f64,
+crate::params::param_struct! {
+    /// Quadratic bending towards the flat state (cloth).
+    #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+    #[serde(default, deny_unknown_fields)]
+    pub struct FlatBendingParams {
+        /// Bending stiffness `k`, N·m (default: 1e-6).
+        pub stiffness: f64,
+        /// Bending damping `c`, N·m·s (default: 0).
+        pub damping: f64,
+    }
 }
 
 impl Default for FlatBendingParams {

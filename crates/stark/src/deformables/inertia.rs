@@ -15,17 +15,19 @@ use crate::error::{check_param, Result, StarkError};
 use crate::generated;
 use serde::{Deserialize, Serialize};
 
-/// Inertia parameters of an object.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct InertiaParams {
-    /// Density per unit length, area or volume of the elements the mass is lumped from: kg/m,
-    /// kg/m² or kg/m³ (default: 1).
-    pub density: f64,
-    /// Inertial damping `d`, 1/s: a drag force `−m d v` (default: 0).
-    pub damping: f64,
-    /// Drop the kinetic terms: each step solves for static equilibrium (default: false).
-    pub quasistatic: bool,
+crate::params::param_struct! {
+    /// Lumped inertia of a deformable object.
+    #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+    #[serde(default, deny_unknown_fields)]
+    pub struct InertiaParams {
+        /// Density per unit length, area or volume of the elements the mass is lumped from: kg/m,
+        /// kg/m² or kg/m³ (default: 1).
+        pub density: f64,
+        /// Inertial damping `d`, 1/s: a drag force `−m d v` (default: 0).
+        pub damping: f64,
+        /// Drop the kinetic terms: each step solves for static equilibrium (default: false).
+        pub quasistatic: bool,
+    }
 }
 
 impl Default for InertiaParams {

@@ -17,15 +17,17 @@ use crate::state::{EvalState, NodeArrays};
 use nalgebra::{Rotation3, Unit, Vector3};
 use serde::{Deserialize, Serialize};
 
-/// Parameters of a group of prescribed nodes.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct PrescribedParams {
-    /// Spring stiffness `k`, N/m (default: 1e3).
-    pub stiffness: f64,
-    /// Largest allowed distance to the target after a step, m; exceeding it doubles the stiffness
-    /// and repeats the step (default: ∞, no hardening).
-    pub tolerance_m: f64,
+crate::params::param_struct! {
+    /// Prescribed positions: nodes pulled to targets by stiff springs hardened to a tolerance.
+    #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+    #[serde(default, deny_unknown_fields)]
+    pub struct PrescribedParams {
+        /// Spring stiffness `k`, N/m (default: 1e3).
+        pub stiffness: f64,
+        /// Largest allowed distance to the target after a step, m; exceeding it doubles the stiffness
+        /// and repeats the step (default: ∞, no hardening).
+        pub tolerance_m: f64,
+    }
 }
 
 impl Default for PrescribedParams {

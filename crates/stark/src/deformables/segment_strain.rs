@@ -14,22 +14,24 @@ use crate::generated;
 use crate::state::NodeArrays;
 use serde::{Deserialize, Serialize};
 
-/// Material of a rod.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct SegmentStrainParams {
-    /// Radius of the circular cross-section, m (default: 5e-3).
-    pub section_radius_m: f64,
-    /// Young's modulus, Pa (default: 1e3).
-    pub youngs_modulus: f64,
-    /// Strain-rate damping coefficient `c`, Pa·s (default: 0).
-    pub damping: f64,
-    /// Strain above which strain limiting acts, unitless (default: ∞, off).
-    pub strain_limit: f64,
-    /// Stiffness of the strain-limiting penalty, Pa (default: 1e3).
-    pub strain_limit_stiffness: f64,
-    /// Uniform scale of the rest length, unitless (default: 1).
-    pub scale: f64,
+crate::params::param_struct! {
+    /// Axial strain of a rod or cable made of segments.
+    #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+    #[serde(default, deny_unknown_fields)]
+    pub struct SegmentStrainParams {
+        /// Radius of the circular cross-section, m (default: 5e-3).
+        pub section_radius_m: f64,
+        /// Young's modulus, Pa (default: 1e3).
+        pub youngs_modulus: f64,
+        /// Strain-rate damping coefficient `c`, Pa·s (default: 0).
+        pub damping: f64,
+        /// Strain above which strain limiting acts, unitless (default: ∞, off).
+        pub strain_limit: f64,
+        /// Stiffness of the strain-limiting penalty, Pa (default: 1e3).
+        pub strain_limit_stiffness: f64,
+        /// Uniform scale of the rest length, unitless (default: 1).
+        pub scale: f64,
+    }
 }
 
 impl Default for SegmentStrainParams {

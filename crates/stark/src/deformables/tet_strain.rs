@@ -26,22 +26,24 @@ use crate::state::NodeArrays;
 use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
 
-/// Material of a tetrahedral solid.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct TetStrainParams {
-    /// Young's modulus, Pa (default: 1e3).
-    pub youngs_modulus: f64,
-    /// Poisson's ratio, unitless in (0, 0.5) (default: 0.3).
-    pub poissons_ratio: f64,
-    /// Strain-rate damping coefficient `c`, Pa·s (default: 0).
-    pub damping: f64,
-    /// Green strain above which the strain-limiting penalty acts, unitless (default: ∞, off).
-    pub strain_limit: f64,
-    /// Stiffness of the strain-limiting penalty, Pa (default: 1e3).
-    pub strain_limit_stiffness: f64,
-    /// Uniform scale of the rest shape (growth or shrinkage), unitless (default: 1).
-    pub scale: f64,
+crate::params::param_struct! {
+    /// Volumetric strain of a solid (Stable Neo-Hookean tets with strain limiting).
+    #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+    #[serde(default, deny_unknown_fields)]
+    pub struct TetStrainParams {
+        /// Young's modulus, Pa (default: 1e3).
+        pub youngs_modulus: f64,
+        /// Poisson's ratio, unitless in (0, 0.5) (default: 0.3).
+        pub poissons_ratio: f64,
+        /// Strain-rate damping coefficient `c`, Pa·s (default: 0).
+        pub damping: f64,
+        /// Green strain above which the strain-limiting penalty acts, unitless (default: ∞, off).
+        pub strain_limit: f64,
+        /// Stiffness of the strain-limiting penalty, Pa (default: 1e3).
+        pub strain_limit_stiffness: f64,
+        /// Uniform scale of the rest shape (growth or shrinkage), unitless (default: 1).
+        pub scale: f64,
+    }
 }
 
 impl Default for TetStrainParams {

@@ -23,26 +23,28 @@ use crate::state::NodeArrays;
 use nalgebra::{Matrix2, Vector3};
 use serde::{Deserialize, Serialize};
 
-/// Material of a membrane.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct TriangleStrainParams {
-    /// Shell thickness, m (default: 1e-3).
-    pub thickness_m: f64,
-    /// Young's modulus, Pa (default: 1e3).
-    pub youngs_modulus: f64,
-    /// Poisson's ratio, unitless in (0, 0.5) (default: 0.3).
-    pub poissons_ratio: f64,
-    /// Strain-rate damping coefficient `c`, Pa·s (default: 0).
-    pub damping: f64,
-    /// Principal Green strain above which strain limiting acts, unitless (default: ∞, off).
-    pub strain_limit: f64,
-    /// Stiffness of the strain-limiting penalty, Pa (default: 1e3).
-    pub strain_limit_stiffness: f64,
-    /// Inflation pressure, Pa, along the triangle normal `(x₁ − x₀) × (x₂ − x₀)` (default: 0).
-    pub inflation_pa: f64,
-    /// Uniform scale of the rest shape, unitless (default: 1).
-    pub scale: f64,
+crate::params::param_struct! {
+    /// Membrane strain of a shell or cloth (Neo-Hookean triangles with strain limiting).
+    #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+    #[serde(default, deny_unknown_fields)]
+    pub struct TriangleStrainParams {
+        /// Shell thickness, m (default: 1e-3).
+        pub thickness_m: f64,
+        /// Young's modulus, Pa (default: 1e3).
+        pub youngs_modulus: f64,
+        /// Poisson's ratio, unitless in (0, 0.5) (default: 0.3).
+        pub poissons_ratio: f64,
+        /// Strain-rate damping coefficient `c`, Pa·s (default: 0).
+        pub damping: f64,
+        /// Principal Green strain above which strain limiting acts, unitless (default: ∞, off).
+        pub strain_limit: f64,
+        /// Stiffness of the strain-limiting penalty, Pa (default: 1e3).
+        pub strain_limit_stiffness: f64,
+        /// Inflation pressure, Pa, along the triangle normal `(x₁ − x₀) × (x₂ − x₀)` (default: 0).
+        pub inflation_pa: f64,
+        /// Uniform scale of the rest shape, unitless (default: 1).
+        pub scale: f64,
+    }
 }
 
 impl Default for TriangleStrainParams {

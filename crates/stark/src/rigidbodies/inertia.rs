@@ -17,14 +17,16 @@ use crate::error::{check_param, Result};
 use crate::state::{angular_block, linear_block, BodyArrays, EvalState};
 use nalgebra::{Matrix3, Vector3};
 
-/// Per-body inertia parameters.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct RigidBodyParams {
-    /// Linear velocity damping ("drag"), 1/s (default 0).
-    pub linear_damping_1_s: f64,
-    /// Angular velocity damping, 1/s (default 0).
-    pub angular_damping_1_s: f64,
+crate::params::param_struct! {
+    /// Damping of a rigid body.
+    #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+    #[serde(deny_unknown_fields, default)]
+    pub struct RigidBodyParams {
+        /// Linear velocity damping ("drag"), 1/s (default: 0).
+        pub linear_damping_1_s: f64,
+        /// Angular velocity damping, 1/s (default: 0).
+        pub angular_damping_1_s: f64,
+    }
 }
 
 impl Default for RigidBodyParams {

@@ -523,15 +523,18 @@ fn check_axis(label: &str, axis: &Vector3<f64>) -> Result<()> {
     Ok(())
 }
 
-/// Joint-level parameters common to composite joints.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct JointParams {
-    /// Stiffness of the hard primitives, N/m (default 1e6).
-    pub stiffness: f64,
-    /// Tolerance of the point primitives, m (default 1e-3).
-    pub tolerance_m: f64,
-    /// Tolerance of the direction primitives, degrees (default 1).
-    pub tolerance_deg: f64,
+crate::params::param_struct! {
+    /// Parameters common to the composite joints: the penalty stiffness of their hard
+    /// constraints and the tolerances they are hardened to.
+    #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+    pub struct JointParams {
+        /// Stiffness of the hard primitives, N/m (default: 1e6).
+        pub stiffness: f64,
+        /// Tolerance of the point primitives, m (default: 1e-3).
+        pub tolerance_m: f64,
+        /// Tolerance of the direction primitives, degrees (default: 1).
+        pub tolerance_deg: f64,
+    }
 }
 
 impl Default for JointParams {
