@@ -10,8 +10,31 @@ pub const NO_BODY: u32 = u32::MAX;
 /// [`DofMap::dof_of_block`].
 pub const NO_DOF: u32 = u32::MAX;
 
+/// A contiguous range of deformable nodes: one object.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+pub struct NodeSetHandle {
+    /// Index of the set.
+    pub index: u32,
+    /// First node in the simulation's node arrays.
+    pub first: u32,
+    /// Number of nodes.
+    pub len: u32,
+}
+
+impl NodeSetHandle {
+    /// Global index of local node `i`.
+    #[inline]
+    pub fn global(&self, i: usize) -> usize {
+        self.first as usize + i
+    }
+    /// Global node range.
+    pub fn range(&self) -> std::ops::Range<usize> {
+        self.first as usize..(self.first + self.len) as usize
+    }
+}
+
 /// All deformable nodes of a simulation in one flat set of arrays (segmented per object by
-/// [`NodeSetHandle`](crate::deformables::NodeSetHandle)).
+/// [`NodeSetHandle`]).
 #[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct NodeArrays {
     /// Rest (material) positions `X`, m.
