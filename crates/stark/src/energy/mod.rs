@@ -3,6 +3,7 @@
 
 pub mod assembly;
 pub mod block_sparse;
+pub mod cell_fields;
 pub mod deformation;
 pub mod dual;
 pub mod jit;
