@@ -218,7 +218,7 @@ impl EvalState<'_> {
 }
 
 /// Positions `x0 + dt·v` for all deformable nodes (only; rigid nodes are placed by
-/// [`apply_kinematic_map`](crate::energy::kinematics::apply_kinematic_map)).
+/// `energy::kinematics::apply_kinematic_map`: plain text, state links no higher module).
 pub fn positions_from_velocities(nodes: &NodeArrays, v: &[Vector3<f64>], dt: f64, out: &mut Vec<Vector3<f64>>) {
     use rayon::prelude::*;
     out.resize(nodes.len(), Vector3::zeros());
