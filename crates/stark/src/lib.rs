@@ -16,10 +16,11 @@ pub mod presets;
 pub mod rigidbodies;
 pub mod robots;
 pub mod scenes;
+pub mod settings;
 pub mod simulation;
 pub mod solver;
 pub mod state;
 
 pub use error::{Result, StarkError};
+pub use settings::Settings;
 pub use simulation::{RunSummary, Simulation, StateCheck, StepReport, UserEnergyHandle};
-pub use solver::Settings;
