@@ -33,6 +33,19 @@ impl NodeSetHandle {
     }
 }
 
+/// Cells of an output mesh, in indices local to its node set.
+#[derive(Clone, Debug)]
+pub enum OutputCells {
+    /// Just the nodes.
+    Points,
+    /// Segments.
+    Segments(Vec<[usize; 2]>),
+    /// Triangles.
+    Triangles(Vec<[usize; 3]>),
+    /// Tetrahedra.
+    Tets(Vec<[usize; 4]>),
+}
+
 /// All deformable nodes of a simulation in one flat set of arrays (segmented per object by
 /// [`NodeSetHandle`]).
 #[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]

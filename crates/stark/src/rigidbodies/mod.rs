@@ -18,8 +18,8 @@ use crate::energy::kinematics::integrate_orientation;
 use crate::energy::EnergyTerm;
 use crate::error::{Result, StarkError};
 use crate::geometry::mesh;
-use crate::io::output::OutputCells;
 use crate::simulation::Simulation;
+use crate::state::OutputCells;
 use crate::state::{BodyArrays, NodeArrays, NO_BODY};
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
