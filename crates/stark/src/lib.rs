@@ -11,6 +11,7 @@ pub mod error;
 pub mod generated;
 pub mod geometry;
 pub mod io;
+pub mod meshes;
 pub mod params;
 pub mod presets;
 pub mod rigidbodies;

@@ -10,7 +10,7 @@
 
 use super::MassProperties;
 use crate::io::mesh_files::load_triangle_mesh;
-use crate::presets::meshes::{self, Mesh};
+use crate::meshes::{self, Mesh};
 use nalgebra::{Matrix3, Vector3};
 use std::collections::HashMap;
 use std::f64::consts::PI;
