@@ -9,6 +9,8 @@
 //! the xy plane); a mesh keeps its file's coordinates (multiplied by `scale`).
 
 use super::MassProperties;
+// Upward on purpose: `Shape::MeshFile` loads its file when meshed; the loader (with the VTK
+// reader) is file I/O and stays in io.
 use crate::io::mesh_files::load_triangle_mesh;
 use crate::meshes::{self, Mesh};
 use nalgebra::{Matrix3, Vector3};
