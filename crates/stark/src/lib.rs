@@ -11,15 +11,17 @@ pub mod error;
 pub mod generated;
 pub mod geometry;
 pub mod io;
+pub mod meshes;
 pub mod params;
 pub mod presets;
 pub mod rigidbodies;
 pub mod robots;
 pub mod scenes;
+pub mod settings;
 pub mod simulation;
 pub mod solver;
 pub mod state;
 
 pub use error::{Result, StarkError};
+pub use settings::Settings;
 pub use simulation::{RunSummary, Simulation, StateCheck, StepReport, UserEnergyHandle};
-pub use solver::Settings;

@@ -6,10 +6,12 @@ use crate::energy::kinematics::{apply_kinematic_map, BodyPose};
 use crate::energy::user_energy::{self, UserEnergyTerm};
 use crate::energy::{EnergyTerm, Node, StepCheck};
 use crate::error::{Result, StarkError};
+// Upward on purpose: the simulation owns its frame/log writer and its checkpoints, and
+// io::output and io::checkpoint read `&Simulation` (a pair that is one unit in two files).
 use crate::io::output::Output;
 use crate::rigidbodies::{commit_bodies, RigidBodies};
+use crate::settings::Settings;
 use crate::solver::newton::{self, ConvergedBy, NewtonFailure, NewtonReport, NewtonWorkspace, PhaseTimes, StepProblem};
-use crate::solver::Settings;
 use crate::state::{dof_blocks, BodyArrays, EvalState, NodeArrays, NO_BODY};
 use nalgebra::Vector3;
 use serde::Serialize;

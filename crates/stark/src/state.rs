@@ -10,8 +10,44 @@ pub const NO_BODY: u32 = u32::MAX;
 /// [`DofMap::dof_of_block`].
 pub const NO_DOF: u32 = u32::MAX;
 
+/// A contiguous range of deformable nodes: one object.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+pub struct NodeSetHandle {
+    /// Index of the set.
+    pub index: u32,
+    /// First node in the simulation's node arrays.
+    pub first: u32,
+    /// Number of nodes.
+    pub len: u32,
+}
+
+impl NodeSetHandle {
+    /// Global index of local node `i`.
+    #[inline]
+    pub fn global(&self, i: usize) -> usize {
+        self.first as usize + i
+    }
+    /// Global node range.
+    pub fn range(&self) -> std::ops::Range<usize> {
+        self.first as usize..(self.first + self.len) as usize
+    }
+}
+
+/// Cells of an output mesh, in indices local to its node set.
+#[derive(Clone, Debug)]
+pub enum OutputCells {
+    /// Just the nodes.
+    Points,
+    /// Segments.
+    Segments(Vec<[usize; 2]>),
+    /// Triangles.
+    Triangles(Vec<[usize; 3]>),
+    /// Tetrahedra.
+    Tets(Vec<[usize; 4]>),
+}
+
 /// All deformable nodes of a simulation in one flat set of arrays (segmented per object by
-/// [`NodeSetHandle`](crate::deformables::NodeSetHandle)).
+/// [`NodeSetHandle`]).
 #[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct NodeArrays {
     /// Rest (material) positions `X`, m.
@@ -195,7 +231,7 @@ impl EvalState<'_> {
 }
 
 /// Positions `x0 + dt·v` for all deformable nodes (only; rigid nodes are placed by
-/// [`apply_kinematic_map`](crate::energy::kinematics::apply_kinematic_map)).
+/// `energy::kinematics::apply_kinematic_map`: plain text, state links no higher module).
 pub fn positions_from_velocities(nodes: &NodeArrays, v: &[Vector3<f64>], dt: f64, out: &mut Vec<Vector3<f64>>) {
     use rayon::prelude::*;
     out.resize(nodes.len(), Vector3::zeros());

@@ -247,8 +247,8 @@ mod tests {
     fn relag_keeps_the_start_of_step_as_slip_origin() {
         use crate::contact::barrier::{barrier, BarrierKind};
         use crate::contact::Contact;
-        use crate::deformables::NodeSetHandle;
         use crate::energy::{EnergyTerm, StepCheck};
+        use crate::state::NodeSetHandle;
         use crate::state::{EvalState, NodeArrays};
         let (dt, mu, thickness, gap, slide) = (0.01, 0.5, 1e-3, 5e-4, 1e-3);
         let mut nodes = NodeArrays::default();

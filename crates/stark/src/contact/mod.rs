@@ -24,8 +24,8 @@ mod tests;
 mod validity;
 pub use barrier::BarrierKind;
 
-use crate::deformables::NodeSetHandle;
 use crate::error::{check_param, Result};
+use crate::state::NodeSetHandle;
 use broad_phase::Candidates;
 use friction::FrictionElement;
 use pairs::ContactPair;

@@ -3,8 +3,8 @@
 
 use super::pairs::ContactPair;
 use super::{Contact, ContactHandle, ContactObject};
-use crate::deformables::NodeSetHandle;
 use crate::error::{check_param, Result, StarkError};
+use crate::state::NodeSetHandle;
 use nalgebra::Vector3;
 
 pub(super) fn sorted_objects([a, b]: [u16; 2]) -> [u16; 2] {

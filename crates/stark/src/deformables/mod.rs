@@ -25,28 +25,8 @@ pub use segment_strain::{SegmentStrain, SegmentStrainHandle, SegmentStrainParams
 pub use tet_strain::{TetStrain, TetStrainHandle, TetStrainParams};
 pub use triangle_strain::{TriangleStrain, TriangleStrainHandle, TriangleStrainParams};
 
-/// A contiguous range of deformable nodes: one object.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
-pub struct NodeSetHandle {
-    /// Index of the set.
-    pub index: u32,
-    /// First node in the simulation's node arrays.
-    pub first: u32,
-    /// Number of nodes.
-    pub len: u32,
-}
-
-impl NodeSetHandle {
-    /// Global index of local node `i`.
-    #[inline]
-    pub fn global(&self, i: usize) -> usize {
-        self.first as usize + i
-    }
-    /// Global node range.
-    pub fn range(&self) -> std::ops::Range<usize> {
-        self.first as usize..(self.first + self.len) as usize
-    }
-}
+// Defined in state (contact uses it too and sits beside deformables); re-exported here.
+pub use crate::state::NodeSetHandle;
 
 /// Map local element indices of `set` to global node indices, checking bounds.
 pub(crate) fn globalize<const K: usize>(

@@ -331,7 +331,7 @@ impl TetStrain {
     /// added) at positions `x`, for output; `None` without such a group. The stress is the
     /// elastic one (strain limiting included, damping left out): Cauchy `σ = P Fᵀ / J` with
     /// `P = ∂ψ/∂F` of the Stable Neo-Hookean density, by hyper-duals on `F`.
-    pub fn cell_fields(&self, label: &str, x: &[Vector3<f64>]) -> Option<Vec<crate::io::fields::CellFields>> {
+    pub fn cell_fields(&self, label: &str, x: &[Vector3<f64>]) -> Option<Vec<crate::energy::cell_fields::CellFields>> {
         let g = self.groups.labels.iter().position(|l| l == label)? as u32;
         let params = &self.groups.params[g as usize];
         let (mu, lambda) = params.lame();
@@ -360,7 +360,7 @@ impl TetStrain {
                 let green = 0.5 * (f.transpose() * f - Matrix3::identity());
                 let ge = Mat(std::array::from_fn(|r| std::array::from_fn(|c| green[(r, c)])));
                 let active = largest_strain_bound(&ge) > params.strain_limit;
-                crate::io::fields::CellFields::new(green, pk1 * f.transpose() / f.determinant(), active)
+                crate::energy::cell_fields::CellFields::new(green, pk1 * f.transpose() / f.determinant(), active)
             })
             .collect();
         Some(out)

@@ -368,7 +368,7 @@ impl TriangleStrain {
     /// is the 2×2 one of the rest plane (in the upper-left block); the stress is the membrane's
     /// Cauchy stress `σ = P Fᵀ / J` (plane stress, `J` the area ratio, damping left out,
     /// strain limiting included) with `P = ∂ψ/∂F` by hyper-duals on the 3×2 `F`.
-    pub fn cell_fields(&self, label: &str, x: &[Vector3<f64>]) -> Option<Vec<crate::io::fields::CellFields>> {
+    pub fn cell_fields(&self, label: &str, x: &[Vector3<f64>]) -> Option<Vec<crate::energy::cell_fields::CellFields>> {
         let g = self.groups.labels.iter().position(|l| l == label)? as u32;
         let params = &self.groups.params[g as usize];
         let (mu, lambda) = params.lame();
@@ -399,7 +399,7 @@ impl TriangleStrain {
                 let mut green = nalgebra::Matrix3::zeros();
                 green.fixed_view_mut::<2, 2>(0, 0).copy_from(&green2);
                 let active = green2.symmetric_eigen().eigenvalues.max() > params.strain_limit;
-                crate::io::fields::CellFields::new(green, pk1 * f.transpose() / area_ratio, active)
+                crate::energy::cell_fields::CellFields::new(green, pk1 * f.transpose() / area_ratio, active)
             })
             .collect();
         Some(out)

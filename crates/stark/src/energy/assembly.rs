@@ -11,8 +11,8 @@
 //! Terms write their stencils in DOF blocks; the assembly maps them to the unknowns
 //! ([`DofMap`]), so the gradient and matrix are over the unknowns only.
 
+use super::block_sparse::BlockSparseMatrix;
 use super::term::{element_stride, EnergyTerm, EvalMode, NO_DOF};
-use crate::solver::linear::BlockSparseMatrix;
 use crate::state::{DofMap, EvalState};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering};

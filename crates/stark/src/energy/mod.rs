@@ -2,6 +2,8 @@
 //! differentiation, the kinematic map from world positions to DOFs, PSD projection and assembly.
 
 pub mod assembly;
+pub mod block_sparse;
+pub mod cell_fields;
 pub mod deformation;
 pub mod dual;
 pub mod jit;

@@ -26,8 +26,8 @@
 //! file or one of another format version is refused with a message saying which.
 
 use crate::error::{Result, StarkError};
+use crate::settings::Settings;
 use crate::simulation::RunSummary;
-use crate::solver::Settings;
 use crate::state::{BodyArrays, NodeArrays};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};

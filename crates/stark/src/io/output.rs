@@ -42,18 +42,8 @@ use serde::Serialize;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-/// Cells of an output mesh, in indices local to its node set.
-#[derive(Clone, Debug)]
-pub enum OutputCells {
-    /// Just the nodes.
-    Points,
-    /// Segments.
-    Segments(Vec<[usize; 2]>),
-    /// Triangles.
-    Triangles(Vec<[usize; 3]>),
-    /// Tetrahedra.
-    Tets(Vec<[usize; 4]>),
-}
+// Defined in state: the models register their output meshes and sit below io.
+pub use crate::state::OutputCells;
 
 /// A mesh written in every frame.
 #[derive(Clone, Debug)]

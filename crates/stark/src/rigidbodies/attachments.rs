@@ -10,6 +10,8 @@ use crate::energy::{Node, Scalar, Vec3};
 use crate::error::{Result, StarkError};
 use crate::geometry::distance::point_triangle_distance_sq;
 use crate::rigidbodies::{RigidBodyHandle, RigidMeshHandle};
+// Upward on purpose: each model adds its builder methods to `Simulation` in its own
+// `impl Simulation` block (the public builder API), so it names the simulation floor.
 use crate::simulation::Simulation;
 use crate::state::{EvalState, NO_BODY};
 use nalgebra::Vector3;

@@ -18,8 +18,10 @@ use crate::energy::kinematics::integrate_orientation;
 use crate::energy::EnergyTerm;
 use crate::error::{Result, StarkError};
 use crate::geometry::mesh;
-use crate::io::output::OutputCells;
+// Upward on purpose: each model adds its builder methods to `Simulation` in its own
+// `impl Simulation` block (the public builder API), so it names the simulation floor.
 use crate::simulation::Simulation;
+use crate::state::OutputCells;
 use crate::state::{BodyArrays, NodeArrays, NO_BODY};
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 

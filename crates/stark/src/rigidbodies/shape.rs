@@ -9,8 +9,10 @@
 //! the xy plane); a mesh keeps its file's coordinates (multiplied by `scale`).
 
 use super::MassProperties;
+// Upward on purpose: `Shape::MeshFile` loads its file when meshed; the loader (with the VTK
+// reader) is file I/O and stays in io.
 use crate::io::mesh_files::load_triangle_mesh;
-use crate::presets::meshes::{self, Mesh};
+use crate::meshes::{self, Mesh};
 use nalgebra::{Matrix3, Vector3};
 use std::collections::HashMap;
 use std::f64::consts::PI;

@@ -21,8 +21,8 @@ use crate::presets::{meshes, SurfaceMaterial};
 use crate::rigidbodies::joints::JointHandle;
 use crate::rigidbodies::{RigidBodyHandle, Shape};
 use crate::robots::urdf::{Actuator, JointOverride, LinkOverride, Robot, RobotOptions};
+use crate::settings::Settings;
 use crate::simulation::Simulation;
-use crate::solver::Settings;
 use nalgebra::Vector3;
 use std::path::Path;
 

@@ -11,8 +11,8 @@ use crate::error::{Result, StarkError};
 use crate::presets::{meshes, SurfaceMaterial, VolumeMaterial};
 use crate::rigidbodies::joints::JointParams;
 use crate::rigidbodies::{MassProperties, RigidBodyHandle};
+use crate::settings::Settings;
 use crate::simulation::Simulation;
-use crate::solver::Settings;
 use nalgebra::{UnitQuaternion, Vector3};
 
 /// A built-in scene.

@@ -3,7 +3,9 @@
 
 pub mod linear;
 pub mod newton;
-pub mod settings;
+// Settings sit below the solver (they aggregate the contact settings, a model floor);
+// `solver::settings` stays as a path.
+pub use crate::settings;
 
 pub use newton::{ConvergedBy, NewtonFailure, NewtonReport, PhaseTimes};
 pub use settings::{FrameFormat, LinearSolver, NewtonSettings, OutputSettings, Projection, Settings};

@@ -15,8 +15,8 @@ use super::robot::{build_robot, RobotEntry};
 use super::spawn::{spawn_rigid_body, spawned_name};
 use super::{LoadedScene, SceneObject};
 use crate::error::StarkError;
+use crate::settings::Settings;
 use crate::simulation::Simulation;
-use crate::solver::Settings;
 use serde::Deserialize;
 use std::path::Path;
 

@@ -3,7 +3,7 @@
 use super::errors::{json_error, SceneError};
 use super::{load_scene_with, parse_scene_with, LoadedScene};
 use crate::error::Result;
-use crate::solver::Settings;
+use crate::settings::Settings;
 use std::path::Path;
 
 /// [`load_scene_with`] after applying `overrides`, each `key.path=value`, to the file's document

@@ -12,6 +12,8 @@ use super::DEFAULT_CONTROLLER_DELAY;
 use super::{coupling, perpendicular, Builder, JointHandle, JointParams, Measure, Primitive, Servo};
 use crate::error::{check_param, Result, StarkError};
 use crate::rigidbodies::RigidBodyHandle;
+// Upward on purpose: each model adds its builder methods to `Simulation` in its own
+// `impl Simulation` block (the public builder API), so it names the simulation floor.
 use crate::simulation::Simulation;
 use nalgebra::{Unit, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};

@@ -20,6 +20,8 @@ use crate::energy::term::StepCheck;
 use crate::energy::{Node, PotentialTerm, Scalar, Vec3};
 use crate::error::{check_param, Result, StarkError};
 use crate::rigidbodies::RigidBodyHandle;
+// Upward on purpose: each model adds its builder methods to `Simulation` in its own
+// `impl Simulation` block (the public builder API), so it names the simulation floor.
 use crate::simulation::Simulation;
 use crate::state::EvalState;
 pub use kind::{JointKind, JointTarget};

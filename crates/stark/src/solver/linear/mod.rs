@@ -1,6 +1,8 @@
 //! Linear solvers for the Newton system `H Δv = −∇E`.
 
-pub mod block_sparse;
+// The matrix type lives in energy (assembly fills it; energy sits below solver);
+// re-exported here so `solver::linear::block_sparse` keeps working.
+pub use crate::energy::block_sparse;
 pub mod cholesky;
 pub mod pcg;
 

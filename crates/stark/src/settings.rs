@@ -1,5 +1,9 @@
 //! Solver and simulation settings: plain data with documented defaults.
+//!
+//! A floor of its own between the models and the solver: `Settings` aggregates the model
+//! settings (contact) and the solver settings, and the solver and simulation read them.
 
+use crate::contact::ContactSettings;
 use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
 
@@ -156,7 +160,7 @@ pub struct Settings {
     /// Output.
     pub output: OutputSettings,
     /// Contact.
-    pub contact: crate::contact::ContactSettings,
+    pub contact: ContactSettings,
     /// Largest number of times one step is repeated after a model hardened a stiffness
     /// (default: 40).
     pub max_hardening_retries: usize,
@@ -174,7 +178,7 @@ impl Default for Settings {
             threads: 0,
             newton: NewtonSettings::default(),
             output: OutputSettings::default(),
-            contact: crate::contact::ContactSettings::default(),
+            contact: ContactSettings::default(),
             max_hardening_retries: 40,
         }
     }

@@ -1,4 +1,5 @@
-//! Mesh generators.
+//! Mesh generators (ground floor: they use only `error` and `geometry`; `presets::meshes`
+//! re-exports them).
 //!
 //! The grid generators ([`triangle_grid`], [`tet_grid`], [`segment_line`],
 //! [`cylindrical_triangle_grid`]) reproduce the vertex order, element order and local vertex
