@@ -10,7 +10,7 @@
 //! (the generalised forces on the body's velocity DOFs, see [`JointReadout`]).
 //!
 //! The types live here; [`JointSet`] (the joint term) in `set.rs`, the composite-joint builder in
-//! `builder.rs`, [`Simulation::add_joint`] in `add_joint.rs` (from a [`JointKind`]), the `add_*`
+//! `builder.rs`, `Simulation::add_joint` (from a [`JointKind`]) in `add_joint.rs`, the `add_*`
 //! wrappers in `constructors.rs`, and run-time control and readouts in `control.rs`.
 
 mod add_joint;
