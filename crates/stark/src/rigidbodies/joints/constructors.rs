@@ -391,7 +391,7 @@ impl Simulation {
     /// [`JointKind::HingeServo`]: a motor whose target speed each step closes the remaining
     /// angle error within `response_time_s`, with at most `max_torque_n_m`. The target is an
     /// angle modulo 360° (the hinge angle is measured in (−180°, 180°]); the servo turns the
-    /// shorter way to it. See [`Servo`] for its steady offset under load.
+    /// shorter way to it. See [`Servo`](super::Servo) for its steady offset under load.
     #[allow(clippy::too_many_arguments)]
     pub fn add_hinge_servo(
         &mut self,
@@ -505,7 +505,7 @@ impl Simulation {
     /// [`JointKind::JointCoupling`] (URDF `<mimic>`): `q_b = multiplier·q_a + offset`, both
     /// measured from the joints' creation (hinge angles in rad, slider positions in m), as a
     /// hard penalty of stiffness `params.stiffness` hardened to the tolerance of `b`'s kind (see
-    /// [`coupling`]). The joints must have coordinates and unique labels.
+    /// [`coupling`](super::coupling)). The joints must have coordinates and unique labels.
     pub fn add_joint_coupling(
         &mut self,
         label: &str,
