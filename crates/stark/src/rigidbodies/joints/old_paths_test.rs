@@ -4,8 +4,10 @@
 //! in `testdata/joints_built_before_add_joint.txt` from the code before the change.
 
 use super::*;
+use crate::rigidbodies::RigidBodyHandle;
+use crate::simulation::Simulation;
 use crate::Settings;
-use nalgebra::Matrix3;
+use nalgebra::{Matrix3, Unit};
 use std::fmt::Write;
 
 fn settings() -> Settings {
