@@ -1,0 +1,404 @@
+//! The time step: attempts prepared, solved by Newton, checked, committed and recorded.
+
+use super::*;
+
+/// One attempt at a time step: its size, end time and gravity, and whether it is a run's
+/// shortened last step.
+pub(super) struct Attempt {
+    dt: f64,
+    t_end: f64,
+    gravity: Vector3<f64>,
+    shortened: bool,
+}
+
+impl Attempt {
+    /// The state the terms evaluate in this attempt, at DOF velocities `v`, node positions `x`
+    /// and body poses `poses`.
+    fn state<'a>(
+        &self,
+        nodes: &'a NodeArrays,
+        bodies: &'a BodyArrays,
+        v: &'a [Vector3<f64>],
+        x: &'a [Vector3<f64>],
+        poses: &'a [BodyPose],
+    ) -> EvalState<'a> {
+        EvalState {
+            dt: self.dt,
+            time: self.t_end,
+            gravity: self.gravity,
+            nodes,
+            v,
+            x,
+            bodies,
+            poses,
+        }
+    }
+}
+
+/// What the attempts of one step add up to, for its report.
+#[derive(Default)]
+pub(super) struct StepTally {
+    times: PhaseTimes,
+    hardening_retries: usize,
+    failed_attempts: usize,
+    failure_reasons: Vec<String>,
+    newton_iterations: usize,
+}
+
+/// Every body at rest at its pose in `bodies` (v = ω = 0): the poses the start- and end-of-step
+/// hooks see.
+pub(super) fn rest_poses(bodies: &BodyArrays, dt: f64) -> Vec<BodyPose> {
+    (0..bodies.len())
+        .map(|b| BodyPose::at_rest(bodies.position[b], &bodies.orientation[b], dt))
+        .collect()
+}
+
+/// The simulation borrowed apart: the energy terms of all models, and the state, scratch
+/// buffers and workspaces they are evaluated with (each phase of a step takes what it needs).
+pub(super) struct StepParts<'a> {
+    terms: Vec<&'a mut dyn EnergyTerm>,
+    settings: &'a Settings,
+    nodes: &'a NodeArrays,
+    bodies: &'a BodyArrays,
+    velocities: &'a mut Vec<Vector3<f64>>,
+    scratch_x: &'a mut Vec<Vector3<f64>>,
+    scratch_poses: &'a mut Vec<BodyPose>,
+    newton: &'a mut NewtonWorkspace,
+    pool: &'a Option<rayon::ThreadPool>,
+}
+
+impl Simulation {
+    pub(super) fn parts(&mut self) -> StepParts<'_> {
+        let Simulation {
+            settings,
+            nodes,
+            bodies,
+            deformables,
+            rigid_bodies,
+            contact,
+            custom,
+            user_energies,
+            newton,
+            velocities,
+            scratch_x,
+            scratch_poses,
+            pool,
+            ..
+        } = self;
+        let mut terms = deformables.terms_mut();
+        terms.extend(rigid_bodies.terms_mut());
+        terms.push(contact);
+        terms.extend(custom.iter_mut().map(|t| &mut **t as &mut dyn EnergyTerm));
+        terms.extend(user_energies.iter_mut().map(|t| &mut **t as &mut dyn EnergyTerm));
+        StepParts {
+            terms,
+            settings,
+            nodes,
+            bodies,
+            velocities,
+            scratch_x,
+            scratch_poses,
+            newton,
+            pool,
+        }
+    }
+
+    pub(super) fn terms_mut(&mut self) -> Vec<&mut dyn EnergyTerm> {
+        self.parts().terms
+    }
+
+    pub(super) fn start(&mut self) -> Result<()> {
+        if self.started {
+            return Ok(());
+        }
+        // Spawns due at the start (a resumed run replayed its spawns when restoring).
+        self.fire_spawns(self.time, false)?;
+        let crossings = self.contact.find_intersections(&self.nodes.x);
+        if !crossings.is_empty() {
+            let shown: Vec<_> = crossings.iter().take(5).cloned().collect();
+            return Err(StarkError::InvalidInput(format!(
+                "the initial state has {} intersecting edge–triangle pairs (objects must start apart): {}{}",
+                crossings.len(),
+                shown.join("; "),
+                if crossings.len() > 5 { "; …" } else { "" }
+            )));
+        }
+        self.started = true;
+        let dir = self.settings.output.directory.clone();
+        // A resumed run continues the logs of the run it came from, cut back to the checkpoint.
+        let keep_lines = self.resumed_at_step;
+        if self.settings.output.step_log {
+            self.output.open_log_keeping(&dir, &self.settings.name, keep_lines)?;
+        }
+        self.open_rigid_logs(keep_lines)?;
+        if keep_lines.is_some() {
+            return Ok(());
+        }
+        if self.settings.output.frames && self.settings.output.fps > 0.0 && !self.output.meshes.is_empty() {
+            self.write_frame_now()?;
+            self.output.next_frame_time = 1.0 / self.settings.output.fps;
+        }
+        Ok(())
+    }
+
+    /// Advance by one accepted time step (retrying with a smaller dt or hardened stiffness as
+    /// needed). Each attempt is prepared, solved and checked; the first that passes is committed
+    /// and recorded.
+    pub fn step(&mut self) -> Result<StepReport> {
+        self.start()?;
+        let wall = Instant::now();
+        let mut tally = StepTally::default();
+        loop {
+            let attempt = self.prepare_attempt()?;
+            let report = match self.solve_attempt(&attempt) {
+                Ok(report) => report,
+                Err(failure) => {
+                    self.fail_attempt(&attempt, failure.to_string(), &mut tally)?;
+                    continue;
+                }
+            };
+            tally.times.add(&report.times);
+            tally.newton_iterations += report.iterations;
+            let retry = self.check_attempt(&attempt);
+            if !retry.is_empty() {
+                tally.hardening_retries += 1;
+                self.summary.hardening_retries += 1;
+                if tally.hardening_retries > self.settings.max_hardening_retries {
+                    return Err(StarkError::StepFailed {
+                        time_s: self.time,
+                        dt_s: attempt.dt,
+                        dt_min_s: self.settings.min_time_step_s,
+                        reason: format!("still out of tolerance: {}", retry.join("; ")),
+                        no_retry: format!("after {} hardenings, the most allowed", tally.hardening_retries),
+                    });
+                }
+                continue;
+            }
+            self.commit_attempt(&attempt);
+            self.fire_spawns(self.time, true)?;
+            // A shortened last step leaves dt as it was (the run may continue).
+            if self.settings.adaptive_time_step && !attempt.shortened {
+                self.dt = (attempt.dt * self.settings.time_step_growth).min(self.settings.time_step_s);
+            }
+            let step_report = self.step_report(&attempt, &report, tally, wall);
+            self.record(&step_report)?;
+            return Ok(step_report);
+        }
+    }
+
+    /// The next attempt's step size and end time, after the events due by then and with the
+    /// contact settings and stiffness of that time.
+    pub(super) fn prepare_attempt(&mut self) -> Result<Attempt> {
+        // The last step of a run is shortened to land on its end time (a step within rounding
+        // of the remaining time is taken whole, so that runs split at a step boundary repeat
+        // the steps of one run bit for bit).
+        let (dt, t_end, shortened) = match self.step_end_limit {
+            Some(end) if end - self.time < self.dt * (1.0 - 1e-6) => (end - self.time, end, true),
+            _ => (self.dt, self.time + self.dt, false),
+        };
+        self.run_events(t_end)?;
+        self.contact.settings = self.settings.contact.clone();
+        if self.contact.needs_stiffness() {
+            let mut masses = self.deformables.inertia.node_masses(self.nodes.len());
+            RigidBodies::set_node_contact_masses(&self.nodes, &self.bodies, &mut masses);
+            let g = self.gravity().norm();
+            self.contact.initialize_stiffness(&masses, self.settings.time_step_s, g);
+        }
+        Ok(Attempt {
+            dt,
+            t_end,
+            gravity: self.gravity(),
+            shortened,
+        })
+    }
+
+    /// Lag the terms' quantities at the start of the step and solve for the end-of-step
+    /// velocities with Newton, starting from those the last attempt left in `velocities`.
+    pub(super) fn solve_attempt(&mut self, attempt: &Attempt) -> std::result::Result<NewtonReport, NewtonFailure> {
+        let StepParts {
+            mut terms,
+            settings,
+            nodes,
+            bodies,
+            velocities,
+            newton,
+            pool,
+            ..
+        } = self.parts();
+        let problem = StepProblem {
+            nodes,
+            bodies,
+            dt: attempt.dt,
+            time: attempt.t_end,
+            gravity: attempt.gravity,
+        };
+        // Everything parallel in the step (lagged quantities, contact detection, the solve) runs
+        // in the simulation's pool, so `threads` bounds it.
+        let mut step = || {
+            // Lagged quantities are taken at the start of the step (v = 0, x = x0).
+            {
+                let zeros = vec![Vector3::zeros(); dof_blocks(nodes, bodies)];
+                let poses = rest_poses(bodies, attempt.dt);
+                let state = attempt.state(nodes, bodies, &zeros, &nodes.x, &poses);
+                for t in terms.iter_mut() {
+                    t.before_step(&state);
+                }
+            }
+            newton::solve(newton, &mut terms, &problem, velocities, &settings.newton)
+        };
+        match pool {
+            Some(p) => p.install(step),
+            None => step(),
+        }
+    }
+
+    /// Place the nodes and bodies at the converged velocities (into the scratch positions and
+    /// poses) and ask every term whether the step is within its tolerances; returns the reasons
+    /// to retry it (none when it passes).
+    pub(super) fn check_attempt(&mut self, attempt: &Attempt) -> Vec<String> {
+        let p = self.parts();
+        apply_kinematic_map(
+            p.nodes,
+            p.bodies,
+            p.velocities,
+            attempt.dt,
+            p.scratch_x,
+            p.scratch_poses,
+        );
+        let state = attempt.state(p.nodes, p.bodies, p.velocities, p.scratch_x, p.scratch_poses);
+        let mut retry = Vec::new();
+        for t in p.terms {
+            if let StepCheck::Retry(msg) = t.check_converged_step(&state) {
+                retry.push(msg);
+            }
+        }
+        retry
+    }
+
+    /// Make the checked attempt the start of the next step: positions and velocities of nodes
+    /// and bodies, the time, and what the terms carry over (`after_step`).
+    pub(super) fn commit_attempt(&mut self, attempt: &Attempt) {
+        let dt = attempt.dt;
+        std::mem::swap(&mut self.nodes.x, &mut self.scratch_x);
+        let n_nodes = self.nodes.len();
+        for i in 0..n_nodes {
+            self.nodes.v[i] = if self.nodes.body[i] == NO_BODY {
+                self.velocities[i]
+            } else {
+                // A rigid node's velocity, for output.
+                (self.nodes.x[i] - self.scratch_x[i]) / dt
+            };
+        }
+        commit_bodies(&mut self.bodies, &self.velocities, n_nodes, dt);
+        self.time = attempt.t_end;
+        let p = self.parts();
+        let poses = rest_poses(p.bodies, dt);
+        let state = attempt.state(p.nodes, p.bodies, p.velocities, &p.nodes.x, &poses);
+        for t in p.terms {
+            t.after_step(&state);
+        }
+    }
+
+    /// A failed attempt: halve dt for the next one, or fail the step when dt is fixed or its half
+    /// would go below the minimum.
+    pub(super) fn fail_attempt(&mut self, attempt: &Attempt, failure: String, tally: &mut StepTally) -> Result<()> {
+        let dt = attempt.dt;
+        tally.failure_reasons.push(format!("dt {dt:.3e} s: {failure}"));
+        tally.failed_attempts += 1;
+        self.summary.failed_steps += 1;
+        let half = dt * 0.5;
+        if !self.settings.adaptive_time_step || half < self.settings.min_time_step_s {
+            let no_retry = if self.settings.adaptive_time_step {
+                format!(
+                    "halving dt would go below the minimum {:e} s",
+                    self.settings.min_time_step_s
+                )
+            } else {
+                "the time step is fixed: adaptive_time_step is off".to_string()
+            };
+            return Err(StarkError::StepFailed {
+                time_s: self.time,
+                dt_s: dt,
+                dt_min_s: self.settings.min_time_step_s,
+                reason: failure,
+                no_retry,
+            });
+        }
+        self.dt = half;
+        Ok(())
+    }
+
+    /// The log line of the committed attempt.
+    pub(super) fn step_report(
+        &self,
+        attempt: &Attempt,
+        report: &NewtonReport,
+        tally: StepTally,
+        wall: Instant,
+    ) -> StepReport {
+        StepReport {
+            step: self.summary.steps,
+            time_s: self.time,
+            dt_s: attempt.dt,
+            newton_iterations: report.iterations,
+            residual_n: report.residual_n,
+            converged_by: report.converged_by,
+            line_search_evaluations: report.line_search_evaluations,
+            cg_iterations: report.cg_iterations,
+            min_step_fraction: report.min_step_fraction,
+            projected: report.projected,
+            hardening_retries: tally.hardening_retries,
+            failed_attempts: tally.failed_attempts,
+            failure_reasons: tally.failure_reasons,
+            total_newton_iterations: tally.newton_iterations,
+            wall_time_s: wall.elapsed().as_secs_f64(),
+            times: tally.times,
+            contact: (!self.contact.objects().is_empty()).then_some(self.contact.stats),
+            newton_residuals_n: report.residuals_n.clone(),
+        }
+    }
+
+    pub(super) fn record(&mut self, r: &StepReport) -> Result<()> {
+        let (violation_m, violation_rad) = self.max_joint_violations();
+        let s = &mut self.summary;
+        s.rigid_bodies = self.bodies.len();
+        s.joints = self.rigid_bodies.named_joints.len();
+        s.max_joint_violation_m = s.max_joint_violation_m.max(violation_m);
+        s.max_joint_violation_rad = s.max_joint_violation_rad.max(violation_rad);
+        s.steps += 1;
+        s.simulated_time_s = self.time;
+        s.newton_iterations += r.total_newton_iterations as u64;
+        s.cg_iterations += r.cg_iterations as u64;
+        s.max_residual_n = s.max_residual_n.max(r.residual_n);
+        match r.converged_by {
+            ConvergedBy::Step => s.steps_converged_by_step_size += 1,
+            ConvergedBy::Rounding => s.steps_at_rounding_floor += 1,
+            ConvergedBy::Residual => {}
+        }
+        s.wall_time_s += r.wall_time_s;
+        s.times.add(&r.times);
+        s.newton_iterations_per_step = s.newton_iterations as f64 / s.steps as f64;
+        s.wall_time_per_simulated_s = if self.time > 0.0 {
+            s.wall_time_s / self.time
+        } else {
+            0.0
+        };
+        s.nodes = self.nodes.len();
+        s.unknowns = 3 * crate::state::DofMap::new(&self.nodes, &self.bodies).len();
+        if let Some(c) = &r.contact {
+            s.mean_active_pairs += (c.active_pairs as f64 - s.mean_active_pairs) / s.steps as f64;
+            s.max_active_pairs = s.max_active_pairs.max(c.active_pairs);
+        }
+        self.output.log(r)?;
+        self.write_rigid_logs(r.step)?;
+        let fps = self.settings.output.fps;
+        if self.settings.output.frames && fps > 0.0 && !self.output.meshes.is_empty() {
+            while self.time >= self.output.next_frame_time - 1e-9 * self.dt {
+                self.write_frame_now()?;
+                self.output.next_frame_time += 1.0 / fps;
+            }
+        }
+        self.summary.frames = self.output.frames_written;
+        Ok(())
+    }
+}
