@@ -12,6 +12,13 @@
 //! `D` depends on `x` only through the 2-vector `u`, whose Hessian
 //! `μλ [(f₁/y) I + ((f₁′y − f₁)/y³) u uᵀ]` is already positive semi-definite for this `f₀`
 //! (eigenvalues `f₁/y ≥ 0` and `f₁′ ≥ 0`), so no projection is needed.
+//!
+//! Sliding, that Hessian is flat along the slip, and a Newton step that stops or reverses the
+//! slip lands far beyond (the line search then cuts the whole step). Newton's globalisation
+//! replaces it by the majoriser `μλ (f₁/y) I` (IRLS: the element's own minimiser is zero slip):
+//! for all elements far from the solution, and per element for a few iterations after a step
+//! that would have carried its slip across zero ([`FrictionElement::stops_or_reverses`]; the
+//! contact term's `refine_hessian`).
 
 use crate::energy::{HyperDual, Scalar, Vec3};
 use nalgebra::Vector3;
@@ -37,6 +44,14 @@ pub struct FrictionElement {
     pub eps_m: f64,
     /// `Tᵀ Σᵢ cᵢ xᵢ⁰`, m.
     pub u0: [f64; 2],
+    /// Take the majorising Hessian while sliding (a Newton step carried this element's slip
+    /// across zero: see [`FrictionElement::stops_or_reverses`]).
+    pub majorize: bool,
+    /// Newton iterations this step that began with `majorize` set and in which the slip did
+    /// not halve.
+    pub majorized_iterations: u8,
+    /// The slip `‖u‖` at the start of the last majorised iteration, m.
+    pub majorized_slip_m: f64,
 }
 
 impl FrictionElement {
@@ -65,7 +80,43 @@ impl FrictionElement {
             mu_lambda,
             eps_m,
             u0: [t0.dot(&rel), t1.dot(&rel)],
+            majorize: false,
+            majorized_iterations: 0,
+            majorized_slip_m: f64::INFINITY,
         }
+    }
+
+    fn slip_f64(&self, x: &[Vector3<f64>; 4]) -> [f64; 2] {
+        let mut u = [-self.u0[0], -self.u0[1]];
+        for i in 0..self.len {
+            for (k, uk) in u.iter_mut().enumerate() {
+                *uk += self.basis[k].dot(&x[i]) * self.weights[i];
+            }
+        }
+        u
+    }
+
+    /// Whether going from `from` (sliding) to `to` the slip along its current direction falls
+    /// below the stick threshold: the element would stop or reverse, and its exact sliding
+    /// Hessian (flat along the slip) predicted neither.
+    pub fn stops_or_reverses(&self, from: &[Vector3<f64>; 4], to: &[Vector3<f64>; 4]) -> bool {
+        let y = self.slip_norm(from);
+        if y < self.eps_m {
+            return false;
+        }
+        let (a, b) = (self.slip_f64(from), self.slip_f64(to));
+        (a[0] * b[0] + a[1] * b[1]) / y < self.eps_m
+    }
+
+    /// Whether the slip at `x` is beyond the stick threshold.
+    pub fn is_sliding(&self, x: &[Vector3<f64>; 4]) -> bool {
+        self.slip_norm(x) >= self.eps_m
+    }
+
+    /// `‖u‖` at `x`, m.
+    pub fn slip_norm(&self, x: &[Vector3<f64>; 4]) -> f64 {
+        let a = self.slip_f64(x);
+        (a[0] * a[0] + a[1] * a[1]).sqrt()
     }
 
     fn slip<S: Scalar>(&self, x: &[Vec3<S>; 4]) -> [S; 2] {
@@ -97,12 +148,8 @@ impl FrictionElement {
     /// curvature along the slip, so Newton from a sliding iterate jumps far past a solution that
     /// sticks (a light rolling wheel: its spin is held by friction alone).
     pub fn derivatives(&self, x: &[Vector3<f64>; 4], majorizer: bool, out: &mut HyperDual<4>) {
-        let mut u = [-self.u0[0], -self.u0[1]];
-        for i in 0..self.len {
-            for k in 0..2 {
-                u[k] += self.basis[k].dot(&x[i]) * self.weights[i];
-            }
-        }
+        let u = self.slip_f64(x);
+        let majorizer = majorizer || self.majorize;
         let eps = self.eps_m;
         let y = (u[0] * u[0] + u[1] * u[1] + (SLIP_REGULARISER * eps).powi(2)).sqrt();
         let ml = self.mu_lambda;
@@ -234,6 +281,36 @@ mod tests {
             }
         }
         assert!(below_exact > 0, "the exact model was expected to undershoot somewhere");
+    }
+
+    /// A step is flagged as crossing the kink exactly when the slip along its current direction
+    /// would fall below the stick threshold (stop or reverse); sticking elements are never
+    /// flagged, and the per-element flag switches the sliding Hessian to the majoriser.
+    #[test]
+    fn steps_that_stop_or_reverse_a_slide_are_flagged() {
+        let x0 = [Vector3::zeros(); 4];
+        let eps = 1e-4;
+        let mut el = FrictionElement::new([0, 0, 0, 0], 1, [1.0, 0.0, 0.0, 0.0], Vector3::z(), &x0, 2.0, eps);
+        let at = |x: f64, y: f64| [Vector3::new(x, y, 0.0), x0[1], x0[2], x0[3]];
+        // Sliding along +x at 10ε.
+        let from = at(10.0 * eps, 0.0);
+        assert!(el.is_sliding(&from));
+        assert!(!el.stops_or_reverses(&from, &at(20.0 * eps, 3.0 * eps)), "keeps sliding");
+        assert!(!el.stops_or_reverses(&from, &at(2.0 * eps, 0.0)), "slows, still beyond ε");
+        assert!(el.stops_or_reverses(&from, &at(0.5 * eps, 0.0)), "stops");
+        assert!(el.stops_or_reverses(&from, &at(-5.0 * eps, 0.0)), "reverses");
+        assert!(el.stops_or_reverses(&from, &at(0.0, 30.0 * eps)), "turns across the slip");
+        // Sticking now: the exact Hessian has the stick curvature, no flag.
+        assert!(!el.stops_or_reverses(&at(0.5 * eps, 0.0), &at(-5.0 * eps, 0.0)));
+        // The flag gives the majoriser's curvature μλ/‖u‖ along the slip.
+        let hessian_xx = |el: &FrictionElement| {
+            let mut d = HyperDual::<4>::constant(0.0);
+            el.derivatives(&from, false, &mut d);
+            d.hess[0][0][0][0]
+        };
+        assert!(hessian_xx(&el).abs() < 1e-9);
+        el.majorize = true;
+        assert!((hessian_xx(&el) - 2.0 / (10.0 * eps)).abs() < 1e-6 * 2.0 / eps);
     }
 
     /// A re-lag (`friction_iterations` > 1) takes the normal force, tangents and weights from the

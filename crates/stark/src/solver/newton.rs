@@ -204,6 +204,67 @@ fn axpy_velocities(dofs: &DofMap, base: &[Vector3<f64>], step: &[f64], alpha: f6
     }
 }
 
+/// Diagnostics: the elements of `term` whose energy change from `from` to `to` (the step
+/// `alpha·step` over the unknowns) exceeds their quadratic model most, with their DOF blocks.
+fn element_model_errors(
+    term: &dyn EnergyTerm,
+    from: &EvalState,
+    to: &EvalState,
+    dofs: &DofMap,
+    step: &[f64],
+    alpha: f64,
+    mode: EvalMode,
+) -> Vec<(f64, String)> {
+    let width = term.stencil_width(from);
+    let n = term.num_elements();
+    let mut stencils = vec![0u32; n * width];
+    term.write_stencils(from, &mut stencils);
+    let mut out = vec![0.0; crate::energy::term::element_stride(width)];
+    let mut errors: Vec<(f64, String)> = (0..n)
+        .map(|e| {
+            let stencil = &stencils[e * width..][..width];
+            let mut d = vec![0.0; 3 * width];
+            for (a, &block) in stencil.iter().enumerate() {
+                if let Some(&dof) = dofs.dof_of_block.get(block as usize) {
+                    if dof != crate::state::NO_DOF {
+                        d[3 * a..][..3].copy_from_slice(&step[3 * dof as usize..][..3]);
+                    }
+                }
+            }
+            term.evaluate_element(e, from, mode, &mut out);
+            let e0 = out[0];
+            let m = 3 * width;
+            let linear: f64 = (0..m).map(|i| out[1 + i] * d[i]).sum();
+            let mut quadratic = 0.0;
+            for a in 0..width {
+                for b in 0..width {
+                    let block = &out[1 + m + 9 * (a * width + b)..][..9];
+                    for i in 0..3 {
+                        for j in 0..3 {
+                            quadratic += d[3 * a + i] * block[3 * i + j] * d[3 * b + j];
+                        }
+                    }
+                }
+            }
+            let model = alpha * linear + 0.5 * alpha * alpha * quadratic;
+            term.evaluate_element(e, to, mode, &mut out);
+            let actual = out[0] - e0;
+            (
+                actual - model,
+                format!(
+                    "{} #{e}: ΔE {actual:+.2e} model {model:+.2e} (lin {:+.2e} quad {:+.2e}) {stencil:?}",
+                    term.name(),
+                    alpha * linear,
+                    0.5 * alpha * alpha * quadratic
+                ),
+            )
+        })
+        .collect();
+    errors.sort_by(|a, b| b.0.total_cmp(&a.0));
+    errors.truncate(4);
+    errors
+}
+
 /// One of Newton's globalisation switches (the friction majoriser, the barriers' definite
 /// form), with its hysteresis: on far from the solution; off once a step is taken in full (the
 /// quadratic model is trusted there) and the residual is below where the switch was last forced
@@ -498,6 +559,12 @@ pub fn solve(
         let mut alpha = {
             let from = problem.state(v, &ws.x, &ws.poses);
             let to = problem.state(&ws.trial_v, &ws.trial_x, &ws.trial_poses);
+            // Elements that the full step carries across a kink their Hessian does not see
+            // (friction that would stop sliding) take a majorising Hessian from the next
+            // assembly on (re-solving now costs more than the iteration it would save).
+            for t in terms.iter_mut() {
+                t.refine_hessian(iteration, &from, &to);
+            }
             max_step(terms, &from, &to)
         };
         report.times.ccd_s += t_ccd.elapsed().as_secs_f64();
@@ -569,6 +636,17 @@ pub fn solve(
                     alpha * descent,
                     top.join(", ")
                 );
+                if std::env::var_os("STARK_NEWTON_TRACE_ELEMENTS").is_some() {
+                    let here = problem.state(v, &ws.x, &ws.poses);
+                    let mut worst: Vec<(f64, String)> = Vec::new();
+                    for t in terms.iter() {
+                        worst.extend(element_model_errors(&**t, &here, &trial, &dofs, &ws.step, alpha, mode));
+                    }
+                    worst.sort_by(|a, b| b.0.total_cmp(&a.0));
+                    for (_, w) in worst.iter().take(4) {
+                        eprintln!("    {w}");
+                    }
+                }
             }
             if e.is_finite() && armijo && (!unresolvable || e < energy - resolvable) {
                 accepted = true;
