@@ -9,9 +9,10 @@
 //! classes listed in `param_list.rs`, which stark-codegen's `gen_stubs` renders into the stubs),
 //! `handles.rs`, `handle_params.rs` (`params`/`set_params` of every handle kind),
 //! `simulation.rs`, `rigid.rs`, `scene.rs`, `meshes.rs` and `geometry.rs`; `convert.rs` holds
-//! the NumPy and error conversions. `joints.rs` adds the joint, rigid-preset and
-//! deformable–rigid attachment methods to `Simulation` (`add_hinge_joint`, `add_box`,
-//! `attach_to_body`, ...), returning `Joint`, `RigidObject` and `RigidAttachmentHandle`.
+//! the NumPy and error conversions. `joints.rs` adds the joint methods to `Simulation`
+//! (`add_hinge_joint`, ..., returning `Joint`), `rigid_objects.rs` the rigid presets and the
+//! deformable–rigid attachments (`add_box`, `attach_to_body`, ..., returning `RigidObject` and
+//! `RigidAttachmentHandle`).
 
 mod convert;
 mod geometry;
@@ -22,6 +23,7 @@ mod meshes;
 mod param_list;
 mod params;
 mod rigid;
+mod rigid_objects;
 mod robots;
 mod scene;
 mod simulation;
@@ -43,6 +45,7 @@ fn _starkrs(m: &Bound<'_, PyModule>) -> PyResult<()> {
     rigid::register(m)?;
     simulation::register(m)?;
     joints::register(m)?;
+    rigid_objects::register(m)?;
     robots::register(m)?;
     scene::register(m)?;
     m.add_submodule(&geometry::module(py)?)?;

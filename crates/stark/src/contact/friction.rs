@@ -295,11 +295,20 @@ mod tests {
         // Sliding along +x at 10ε.
         let from = at(10.0 * eps, 0.0);
         assert!(el.is_sliding(&from));
-        assert!(!el.stops_or_reverses(&from, &at(20.0 * eps, 3.0 * eps)), "keeps sliding");
-        assert!(!el.stops_or_reverses(&from, &at(2.0 * eps, 0.0)), "slows, still beyond ε");
+        assert!(
+            !el.stops_or_reverses(&from, &at(20.0 * eps, 3.0 * eps)),
+            "keeps sliding"
+        );
+        assert!(
+            !el.stops_or_reverses(&from, &at(2.0 * eps, 0.0)),
+            "slows, still beyond ε"
+        );
         assert!(el.stops_or_reverses(&from, &at(0.5 * eps, 0.0)), "stops");
         assert!(el.stops_or_reverses(&from, &at(-5.0 * eps, 0.0)), "reverses");
-        assert!(el.stops_or_reverses(&from, &at(0.0, 30.0 * eps)), "turns across the slip");
+        assert!(
+            el.stops_or_reverses(&from, &at(0.0, 30.0 * eps)),
+            "turns across the slip"
+        );
         // Sticking now: the exact Hessian has the stick curvature, no flag.
         assert!(!el.stops_or_reverses(&at(0.5 * eps, 0.0), &at(-5.0 * eps, 0.0)));
         // The flag gives the majoriser's curvature μλ/‖u‖ along the slip.

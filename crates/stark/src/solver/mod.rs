@@ -3,6 +3,7 @@
 
 pub mod linear;
 pub mod newton;
+mod trace;
 // Settings sit below the solver (they aggregate the contact settings, a model floor);
 // `solver::settings` stays as a path.
 pub use crate::settings;

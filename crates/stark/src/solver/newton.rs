@@ -9,6 +9,7 @@ use super::linear::block_sparse::{dot, norm_inf};
 use super::linear::cholesky::CholeskySolver;
 use super::linear::pcg;
 use super::settings::{LinearSolver, NewtonSettings, Projection};
+use super::trace;
 use crate::energy::assembly::{Assembled, Assembler};
 use crate::energy::kinematics::{apply_kinematic_map, BodyPose};
 use crate::energy::{EnergyTerm, EvalMode};
@@ -202,67 +203,6 @@ fn axpy_velocities(dofs: &DofMap, base: &[Vector3<f64>], step: &[f64], alpha: f6
     for (d, &block) in dofs.block_of_dof.iter().enumerate() {
         out[block as usize] += Vector3::new(step[3 * d], step[3 * d + 1], step[3 * d + 2]) * alpha;
     }
-}
-
-/// Diagnostics: the elements of `term` whose energy change from `from` to `to` (the step
-/// `alpha·step` over the unknowns) exceeds their quadratic model most, with their DOF blocks.
-fn element_model_errors(
-    term: &dyn EnergyTerm,
-    from: &EvalState,
-    to: &EvalState,
-    dofs: &DofMap,
-    step: &[f64],
-    alpha: f64,
-    mode: EvalMode,
-) -> Vec<(f64, String)> {
-    let width = term.stencil_width(from);
-    let n = term.num_elements();
-    let mut stencils = vec![0u32; n * width];
-    term.write_stencils(from, &mut stencils);
-    let mut out = vec![0.0; crate::energy::term::element_stride(width)];
-    let mut errors: Vec<(f64, String)> = (0..n)
-        .map(|e| {
-            let stencil = &stencils[e * width..][..width];
-            let mut d = vec![0.0; 3 * width];
-            for (a, &block) in stencil.iter().enumerate() {
-                if let Some(&dof) = dofs.dof_of_block.get(block as usize) {
-                    if dof != crate::state::NO_DOF {
-                        d[3 * a..][..3].copy_from_slice(&step[3 * dof as usize..][..3]);
-                    }
-                }
-            }
-            term.evaluate_element(e, from, mode, &mut out);
-            let e0 = out[0];
-            let m = 3 * width;
-            let linear: f64 = (0..m).map(|i| out[1 + i] * d[i]).sum();
-            let mut quadratic = 0.0;
-            for a in 0..width {
-                for b in 0..width {
-                    let block = &out[1 + m + 9 * (a * width + b)..][..9];
-                    for i in 0..3 {
-                        for j in 0..3 {
-                            quadratic += d[3 * a + i] * block[3 * i + j] * d[3 * b + j];
-                        }
-                    }
-                }
-            }
-            let model = alpha * linear + 0.5 * alpha * alpha * quadratic;
-            term.evaluate_element(e, to, mode, &mut out);
-            let actual = out[0] - e0;
-            (
-                actual - model,
-                format!(
-                    "{} #{e}: ΔE {actual:+.2e} model {model:+.2e} (lin {:+.2e} quad {:+.2e}) {stencil:?}",
-                    term.name(),
-                    alpha * linear,
-                    0.5 * alpha * alpha * quadratic
-                ),
-            )
-        })
-        .collect();
-    errors.sort_by(|a, b| b.0.total_cmp(&a.0));
-    errors.truncate(4);
-    errors
 }
 
 /// One of Newton's globalisation switches (the friction majoriser, the barriers' definite
@@ -623,30 +563,15 @@ pub fn solve(
             let unresolvable = -alpha * descent < resolvable;
             let armijo = e <= energy + settings.armijo * alpha * descent + noise;
             if trace && !armijo {
-                let mut rises: Vec<(f64, &str)> = terms
-                    .iter()
-                    .zip(&term_energies)
-                    .map(|(t, e0)| (t.energy(&trial) - e0, t.name()))
-                    .collect();
-                rises.sort_by(|a, b| b.0.total_cmp(&a.0));
-                let top: Vec<String> = rises.iter().take(3).map(|(d, n)| format!("{n} {d:+.3e}")).collect();
-                eprintln!(
-                    "  cut at {alpha:.3e}: ΔE {:+.3e} (model {:+.3e}); by term: {}",
-                    e - energy,
-                    alpha * descent,
-                    top.join(", ")
-                );
-                if std::env::var_os("STARK_NEWTON_TRACE_ELEMENTS").is_some() {
-                    let here = problem.state(v, &ws.x, &ws.poses);
-                    let mut worst: Vec<(f64, String)> = Vec::new();
-                    for t in terms.iter() {
-                        worst.extend(element_model_errors(&**t, &here, &trial, &dofs, &ws.step, alpha, mode));
-                    }
-                    worst.sort_by(|a, b| b.0.total_cmp(&a.0));
-                    for (_, w) in worst.iter().take(4) {
-                        eprintln!("    {w}");
-                    }
-                }
+                let here = problem.state(v, &ws.x, &ws.poses);
+                let cut = trace::Cut {
+                    alpha,
+                    energy_change: e - energy,
+                    model_change: alpha * descent,
+                    term_energies: &term_energies,
+                    mode,
+                };
+                cut.print(terms, &here, &trial, &dofs, &ws.step);
             }
             if e.is_finite() && armijo && (!unresolvable || e < energy - resolvable) {
                 accepted = true;
@@ -728,22 +653,7 @@ pub fn solve(
                 report.line_search_evaluations,
                 report.cg_iterations,
                 norm_inf(&ws.step),
-                {
-                    let d = (0..ws.step.len())
-                        .max_by(|&a, &b| ws.step[a].abs().total_cmp(&ws.step[b].abs()))
-                        .unwrap_or(0);
-                    let block = dofs.block_of_dof[d / 3] as usize;
-                    let nn = problem.nodes.len();
-                    if block < nn {
-                        format!("node {block}")
-                    } else {
-                        format!(
-                            "body {} {}",
-                            (block - nn) / 2,
-                            if (block - nn).is_multiple_of(2) { "lin" } else { "ang" }
-                        )
-                    }
-                }
+                trace::largest_entry(&ws.step, &dofs, problem.nodes.len())
             );
         }
         std::mem::swap(v, &mut ws.trial_v);
