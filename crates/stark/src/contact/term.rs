@@ -3,7 +3,9 @@
 use super::pairs::{pair_derivatives, pair_energy};
 use super::Contact;
 use super::PairHessian;
-use crate::energy::kinematics::{element_blocks, map_element, MapProjection, NodeMap};
+use crate::energy::kinematics::{
+    consecutive_slots, element_blocks, map_element, write_deformable_element, MapProjection, NodeMap,
+};
 use crate::energy::term::{element_stride, NO_DOF};
 use crate::energy::Node;
 use crate::energy::{EnergyTerm, EvalMode, HyperDual, Scalar, StepCheck, Vec3};
@@ -24,67 +26,6 @@ pub(super) fn node_maps<'s>(nodes: &[u32; 4], state: &'s EvalState) -> [NodeMap<
             Node::Point(i).map(state)
         }
     })
-}
-
-/// Write node-space derivatives of a 4-node stencil in the deformable DOF layout (`∂x/∂v = dt·I`).
-fn write_dofs(d: &HyperDual<4>, dt: f64, out: &mut [f64]) {
-    out[0] = d.value;
-    for (k, g) in d.grad.as_flattened().iter().enumerate() {
-        out[1 + k] = dt * g;
-    }
-    let dt2 = dt * dt;
-    let base = 13;
-    for a in 0..4 {
-        for b in 0..4 {
-            let blk = &mut out[base + 9 * (a * 4 + b)..base + 9 * (a * 4 + b) + 9];
-            for i in 0..3 {
-                for j in 0..3 {
-                    blk[3 * i + j] = dt2 * d.hess[a][i][b][j];
-                }
-            }
-        }
-    }
-}
-
-/// [`write_dofs`] for a stencil of deformable (`Free`) and absent (`Fixed`) nodes in the layout of
-/// [`element_stride`]`(width)` with the blocks of `element_blocks` (the free nodes in order).
-fn write_free_dofs(d: &HyperDual<4>, maps: &[NodeMap; 4], dt: f64, out: &mut [f64]) {
-    let width = (1..=8)
-        .find(|&w| element_stride(w) == out.len())
-        .expect("an element stride");
-    let mut slot = [usize::MAX; 4];
-    let mut m = 0;
-    for (a, map) in maps.iter().enumerate() {
-        if matches!(map, NodeMap::Free { .. }) {
-            slot[a] = m;
-            m += 1;
-        }
-    }
-    out.iter_mut().for_each(|o| *o = 0.0);
-    out[0] = d.value;
-    let dt2 = dt * dt;
-    let base = 1 + 3 * width;
-    for a in 0..4 {
-        let sa = slot[a];
-        if sa == usize::MAX {
-            continue;
-        }
-        for i in 0..3 {
-            out[1 + 3 * sa + i] = dt * d.grad[a][i];
-        }
-        for b in 0..4 {
-            let sb = slot[b];
-            if sb == usize::MAX {
-                continue;
-            }
-            let blk = &mut out[base + 9 * (sa * width + sb)..base + 9 * (sa * width + sb) + 9];
-            for i in 0..3 {
-                for j in 0..3 {
-                    blk[3 * i + j] = dt2 * d.hess[a][i][b][j];
-                }
-            }
-        }
-    }
 }
 
 impl EnergyTerm for Contact {
@@ -170,7 +111,7 @@ impl EnergyTerm for Contact {
             f.derivatives(&Self::stencil_x(&f.nodes, state.x), self.friction_majorizer, &mut d);
         }
         if out.len() == element_stride(4) {
-            write_dofs(&d, state.dt, out);
+            write_deformable_element(&d, &consecutive_slots(), state.dt, out);
         } else {
             let nodes = if e < self.pairs.len() {
                 self.pairs[e].nodes
@@ -181,7 +122,14 @@ impl EnergyTerm for Contact {
             if maps.iter().all(|m| matches!(m, NodeMap::Free { .. } | NodeMap::Fixed)) {
                 // No rigid node (e.g. towel–towel pairs in a scene with bodies): the map is
                 // `dt·I` per node, written straight into the wider layout.
-                write_free_dofs(&d, &maps, state.dt, out);
+                let mut next = 0;
+                let slots = maps.map(|m| {
+                    matches!(m, NodeMap::Free { .. }).then(|| {
+                        next += 1;
+                        next - 1
+                    })
+                });
+                write_deformable_element(&d, &slots, state.dt, out);
                 return;
             }
             // Through the kinematic map; the position-space Hessian is already positive

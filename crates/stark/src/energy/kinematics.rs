@@ -189,6 +189,46 @@ pub enum MapProjection {
     SecondOrderOnly,
 }
 
+/// Write position-space derivatives of an element whose nodes are deformable (or have no DOFs)
+/// in DOF space: `∂x/∂v = dt·I`, so `∇ᵥ = dt ∇ₓ` and `Hᵥ = dt² Hₓ`. Node `a` goes to block slot
+/// `slots[a]` of the layout [`element_stride`](super::term::element_stride)`(width)` (the width
+/// from `out`'s length), `None` for a node without DOFs; entries of unused slots are zero.
+#[inline]
+pub fn write_deformable_element<const N: usize>(
+    d: &HyperDual<N>,
+    slots: &[Option<usize>; N],
+    dt: f64,
+    out: &mut [f64],
+) {
+    let width = super::term::width_of_stride(out.len());
+    if width > N || slots.iter().any(Option::is_none) {
+        out.iter_mut().for_each(|o| *o = 0.0);
+    }
+    out[0] = d.value;
+    let dt2 = dt * dt;
+    let base = 1 + 3 * width;
+    for (a, sa) in slots.iter().enumerate() {
+        let Some(sa) = *sa else { continue };
+        for i in 0..3 {
+            out[1 + 3 * sa + i] = dt * d.grad[a][i];
+        }
+        for (b, sb) in slots.iter().enumerate() {
+            let Some(sb) = *sb else { continue };
+            let block = &mut out[base + 9 * (sa * width + sb)..][..9];
+            for i in 0..3 {
+                for j in 0..3 {
+                    block[3 * i + j] = dt2 * d.hess[a][i][b][j];
+                }
+            }
+        }
+    }
+}
+
+/// The slots of [`write_deformable_element`] for a stencil whose nodes all have DOFs, in order.
+pub fn consecutive_slots<const N: usize>() -> [Option<usize>; N] {
+    std::array::from_fn(Some)
+}
+
 /// Map position-space derivatives of an element (value, gradient and full Hessian of `d`) to its
 /// DOF blocks (see [`element_blocks`]), writing the solver layout of
 /// [`element_stride`](super::term::element_stride)`(width)` into `out`, with the Hessian made
