@@ -338,8 +338,8 @@ fn collect(case: &Case, plan: &SweepPlan) -> stark::Result<CaseResult> {
     Ok(result)
 }
 
-/// Run a sweep file: every case not finished yet, `jobs` at a time; then the summary (only the
-/// summary with `summary_only`).
+/// Run a sweep file: every case not finished yet, `jobs` at a time, the summary rewritten after
+/// each (only the summary with `summary_only`).
 pub fn sweep(file: &Path, summary_only: bool) -> stark::Result<bool> {
     let (cases, plan) = cases(file)?;
     if summary_only {
@@ -411,6 +411,9 @@ pub fn sweep(file: &Path, summary_only: bool) -> stark::Result<bool> {
                     case.name,
                     if interrupted { " (nothing simulated)" } else { "" }
                 );
+                // The results folder stays complete while the sweep goes on (a session may end
+                // before the sweep does).
+                write_summary(&cases, &plan)?;
             } else {
                 println!(
                     "failed                {} (exit {status}; see {})",
