@@ -4,7 +4,7 @@ use super::pairs::{pair_derivatives, pair_energy};
 use super::Contact;
 use super::PairHessian;
 use crate::energy::kinematics::{
-    consecutive_slots, element_blocks, map_element, write_deformable_element, MapProjection, NodeMap,
+    element_blocks, map_element, write_deformable_element, write_deformable_element_in_slots, MapProjection, NodeMap,
 };
 use crate::energy::term::{element_stride, NO_DOF};
 use crate::energy::Node;
@@ -111,7 +111,7 @@ impl EnergyTerm for Contact {
             f.derivatives(&Self::stencil_x(&f.nodes, state.x), self.friction_majorizer, &mut d);
         }
         if out.len() == element_stride(4) {
-            write_deformable_element(&d, &consecutive_slots(), state.dt, out);
+            write_deformable_element(&d, state.dt, out);
         } else {
             let nodes = if e < self.pairs.len() {
                 self.pairs[e].nodes
@@ -129,7 +129,7 @@ impl EnergyTerm for Contact {
                         next - 1
                     })
                 });
-                write_deformable_element(&d, &slots, state.dt, out);
+                write_deformable_element_in_slots(&d, &slots, state.dt, out);
                 return;
             }
             // Through the kinematic map; the position-space Hessian is already positive

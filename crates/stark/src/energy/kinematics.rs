@@ -189,21 +189,46 @@ pub enum MapProjection {
     SecondOrderOnly,
 }
 
-/// Write position-space derivatives of an element whose nodes are deformable (or have no DOFs)
-/// in DOF space: `∂x/∂v = dt·I`, so `∇ᵥ = dt ∇ₓ` and `Hᵥ = dt² Hₓ`. Node `a` goes to block slot
-/// `slots[a]` of the layout [`element_stride`](super::term::element_stride)`(width)` (the width
-/// from `out`'s length), `None` for a node without DOFs; entries of unused slots are zero.
+/// Write position-space derivatives of an element whose nodes are all deformable, in stencil
+/// order, in DOF space: `∂x/∂v = dt·I`, so `∇ᵥ = dt ∇ₓ` and `Hᵥ = dt² Hₓ`, into the layout
+/// [`element_stride`](super::term::element_stride)`(width)` (the width from `out`'s length; the
+/// entries of slots beyond `N` are zero).
 #[inline]
-pub fn write_deformable_element<const N: usize>(
+pub fn write_deformable_element<const N: usize>(d: &HyperDual<N>, dt: f64, out: &mut [f64]) {
+    let width = super::term::width_of_stride(out.len());
+    let n = 3 * N;
+    if width > N {
+        out[1 + n..].iter_mut().for_each(|o| *o = 0.0);
+    }
+    out[0] = d.value;
+    for (k, g) in d.grad.as_flattened().iter().enumerate() {
+        out[1 + k] = dt * g;
+    }
+    let dt2 = dt * dt;
+    let h = d.hess.as_flattened().as_flattened().as_flattened();
+    let base = 1 + 3 * width;
+    for a in 0..N {
+        for b in 0..N {
+            let block = &mut out[base + 9 * (a * width + b)..][..9];
+            for i in 0..3 {
+                for j in 0..3 {
+                    block[3 * i + j] = dt2 * h[(3 * a + i) * n + 3 * b + j];
+                }
+            }
+        }
+    }
+}
+
+/// [`write_deformable_element`] for a stencil with nodes that have no DOFs: node `a` goes to
+/// block slot `slots[a]`, `None` for a node without DOFs.
+pub fn write_deformable_element_in_slots<const N: usize>(
     d: &HyperDual<N>,
     slots: &[Option<usize>; N],
     dt: f64,
     out: &mut [f64],
 ) {
     let width = super::term::width_of_stride(out.len());
-    if width > N || slots.iter().any(Option::is_none) {
-        out.iter_mut().for_each(|o| *o = 0.0);
-    }
+    out.iter_mut().for_each(|o| *o = 0.0);
     out[0] = d.value;
     let dt2 = dt * dt;
     let base = 1 + 3 * width;
@@ -222,11 +247,6 @@ pub fn write_deformable_element<const N: usize>(
             }
         }
     }
-}
-
-/// The slots of [`write_deformable_element`] for a stencil whose nodes all have DOFs, in order.
-pub fn consecutive_slots<const N: usize>() -> [Option<usize>; N] {
-    std::array::from_fn(Some)
 }
 
 /// Map position-space derivatives of an element (value, gradient and full Hessian of `d`) to its
