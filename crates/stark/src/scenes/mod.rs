@@ -127,6 +127,12 @@ fn builtin_scenes_without_suites() -> Vec<BuiltinScene> {
             build: |s| hanging_cloth_n(s, 128, "hanging_cloth_128"),
         },
         BuiltinScene {
+            name: "hanging_cloth_256",
+            description: "hanging_cloth at 256×256 quads (the scaling benchmark's 200k unknowns; not in `stark bench`'s default list)",
+            duration_s: 151.0 / 30.0,
+            build: |s| hanging_cloth_n(s, 256, "hanging_cloth_256"),
+        },
+        BuiltinScene {
             name: "cloth_on_sphere",
             description:
                 "1 m cotton cloth, 32×32, dropped on a kinematic sphere of radius 0.25 m (contact, self-contact)",
