@@ -100,17 +100,13 @@ impl FrictionElement {
     /// below the stick threshold: the element would stop or reverse, and its exact sliding
     /// Hessian (flat along the slip) predicted neither.
     pub fn stops_or_reverses(&self, from: &[Vector3<f64>; 4], to: &[Vector3<f64>; 4]) -> bool {
-        let y = self.slip_norm(from);
+        let a = self.slip_f64(from);
+        let y = (a[0] * a[0] + a[1] * a[1]).sqrt();
         if y < self.eps_m {
             return false;
         }
-        let (a, b) = (self.slip_f64(from), self.slip_f64(to));
+        let b = self.slip_f64(to);
         (a[0] * b[0] + a[1] * b[1]) / y < self.eps_m
-    }
-
-    /// Whether the slip at `x` is beyond the stick threshold.
-    pub fn is_sliding(&self, x: &[Vector3<f64>; 4]) -> bool {
-        self.slip_norm(x) >= self.eps_m
     }
 
     /// `‖u‖` at `x`, m.
@@ -294,7 +290,7 @@ mod tests {
         let at = |x: f64, y: f64| [Vector3::new(x, y, 0.0), x0[1], x0[2], x0[3]];
         // Sliding along +x at 10ε.
         let from = at(10.0 * eps, 0.0);
-        assert!(el.is_sliding(&from));
+        assert!(el.slip_norm(&from) >= eps);
         assert!(
             !el.stops_or_reverses(&from, &at(20.0 * eps, 3.0 * eps)),
             "keeps sliding"

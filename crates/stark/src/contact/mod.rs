@@ -202,8 +202,6 @@ pub struct Contact {
     lag_solves: usize,
     /// Newton asked for the friction Hessian's majorising stand-in (`use_majorizer_hessian`).
     friction_majorizer: bool,
-    /// The Newton iteration of the last `refine_hessian` call this step.
-    refined_iteration: Option<usize>,
     /// Newton asked for the barrier pairs' positive semi-definite Hessian, `settings.hessian`
     /// (`use_definite_hessian`); otherwise they take their exact one.
     definite_barriers: bool,
@@ -237,7 +235,6 @@ impl Default for Contact {
             relag_pending: false,
             lag_solves: 0,
             friction_majorizer: false,
-            refined_iteration: None,
             definite_barriers: true,
             stats: ContactStats {
                 min_distance_m: f64::INFINITY,

@@ -143,7 +143,6 @@ impl EnergyTerm for Contact {
         }
     }
     fn before_step(&mut self, state: &EvalState) {
-        self.refined_iteration = None;
         // Objects, thicknesses or enabled pairs may have changed since the last step.
         self.candidate_cache = None;
         self.rigid_split = self.split_rigid(state);
@@ -160,11 +159,7 @@ impl EnergyTerm for Contact {
     fn use_majorizer_hessian(&mut self, on: bool) {
         self.friction_majorizer = on;
     }
-    fn refine_hessian(&mut self, iteration: usize, from: &EvalState, to: &EvalState) {
-        if self.refined_iteration == Some(iteration) {
-            return;
-        }
-        self.refined_iteration = Some(iteration);
+    fn refine_hessian(&mut self, from: &EvalState, to: &EvalState) {
         for f in self.friction_elements.iter_mut() {
             let x_from = Self::stencil_x(&f.nodes, from.x);
             if f.majorize {

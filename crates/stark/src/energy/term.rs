@@ -97,13 +97,12 @@ pub trait EnergyTerm: Send + Sync {
         false
     }
 
-    /// Newton's globalisation, per element: after a Newton direction is solved, `to` is the
-    /// state a full step from `from` would reach. A term whose elements the step carries across
+    /// Newton's globalisation, per element, called once per Newton iteration: after the
+    /// direction is solved, `to` is the state a full step from `from` would reach. A term whose elements the step carries across
     /// a kink that their exact Hessian does not see (a sliding friction element whose slip would
     /// stop or reverse: its exact Hessian has no curvature along the slip) may switch those
-    /// elements to a majorising Hessian for the next assemblies (a few iterations). `iteration`
-    /// counts the step's Newton iterations.
-    fn refine_hessian(&mut self, _iteration: usize, _from: &EvalState, _to: &EvalState) {}
+    /// elements to a majorising Hessian for the next assemblies (a few iterations).
+    fn refine_hessian(&mut self, _from: &EvalState, _to: &EvalState) {}
 
     /// Called once per step after the first assembly, with the total gradient (DOF space) at
     /// `state`: a term may re-scale itself to balance the others (contact raises its barrier

@@ -503,7 +503,7 @@ pub fn solve(
             // (friction that would stop sliding) take a majorising Hessian from the next
             // assembly on (re-solving now costs more than the iteration it would save).
             for t in terms.iter_mut() {
-                t.refine_hessian(iteration, &from, &to);
+                t.refine_hessian(&from, &to);
             }
             max_step(terms, &from, &to)
         };
