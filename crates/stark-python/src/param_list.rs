@@ -1,7 +1,7 @@
-//! The model parameter classes of the module, in the order of the type stubs: the one list the
-//! extension (`params.rs` defines a class per entry) and the stub generator
-//! (`stark-codegen/src/bin/gen_stubs.rs`, which includes this file) share. The fields and their
-//! docs come from the library's tables (`stark::params`).
+//! The settings, model parameter and material classes of the module, in the order of the type
+//! stubs: the lists the extension (`params.rs`) and the stub generator
+//! (`stark-codegen/src/bin/gen_stubs.rs`, which includes this file) share. The fields' docs come
+//! from the library's tables (`stark::params`).
 
 /// Calls `$m! { PythonName => RustStruct, ... }` with every parameter class.
 macro_rules! param_classes {
@@ -21,3 +21,30 @@ macro_rules! param_classes {
     };
 }
 pub(crate) use param_classes;
+
+/// Calls `$m! { PythonName => RustStruct, ... }` with every settings class (mirror classes
+/// whose docs come from the library's `Documented` tables).
+macro_rules! settings_classes {
+    ($m:ident) => {
+        $m! {
+            Settings => stark::Settings,
+            NewtonSettings => stark::settings::NewtonSettings,
+            OutputSettings => stark::settings::OutputSettings,
+            ContactSettings => stark::contact::ContactSettings,
+        }
+    };
+}
+pub(crate) use settings_classes;
+
+/// Calls `$m! { PythonName => RustStruct, ... }` with every material class (mirror classes
+/// whose docs come from the library's `Documented` tables).
+macro_rules! material_classes {
+    ($m:ident) => {
+        $m! {
+            LineMaterial => stark::presets::LineMaterial,
+            VolumeMaterial => stark::presets::VolumeMaterial,
+            SurfaceMaterial => stark::presets::SurfaceMaterial,
+        }
+    };
+}
+pub(crate) use material_classes;

@@ -7,10 +7,12 @@
 //! enter a simulation (`Simulation(settings)`, `add_surface`, `set_params`), with the library's
 //! messages.
 //!
-//! Settings and materials are mirror classes (`mirror!`: a copy of each field). The model
-//! parameter classes (`InertiaParams`, `TetStrainParams`, ...) wrap the library struct and take
-//! their attributes and docs from its field table (`stark::params`), so they are spelled only in
-//! the library; `param_list.rs` names them.
+//! Settings and materials are mirror classes (`mirror!`: an attribute per field, of the Python
+//! type that stands for the Rust one, checked complete by the compiler), their docs taken from
+//! the library's `Documented` tables. The model parameter classes (`InertiaParams`,
+//! `TetStrainParams`, ...) wrap the library struct and take their attributes and docs from its
+//! field table (`stark::params`). So docs are written only in the library; `param_list.rs` names
+//! the classes.
 
 use crate::convert::{stark_err, Arr3};
 use pyo3::exceptions::{PyAttributeError, PyTypeError, PyValueError};
@@ -19,7 +21,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyString, PyType};
 use serde::de::DeserializeOwned;
 use serde::Serialize;
-use stark::params::{doc_text, FieldDoc, FieldKind, FieldValue, ParamFields};
+use stark::params::{doc_text, Documented, FieldDoc, FieldKind, FieldValue, ParamFields};
 use std::ffi::{c_int, c_void, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::PathBuf;
@@ -32,6 +34,12 @@ pub trait Mirror: Sized {
     fn from_rust(py: Python<'_>, r: &Self::Rust) -> PyResult<Self>;
     /// The Rust value.
     fn to_rust(&self, py: Python<'_>) -> PyResult<Self::Rust>;
+}
+
+/// The attributes of a class made by `mirror!`.
+pub trait MirrorFields {
+    /// The attribute names, in the Rust struct's order.
+    const FIELDS: &'static [&'static str];
 }
 
 /// A field of a mirror class and the Rust field it stands for.
@@ -112,19 +120,24 @@ impl<'a, 'py, E: DeserializeOwned> FromPyObject<'a, 'py> for Choice<E> {
     }
 }
 
-/// Defines a mirror class: the struct with every field as an attribute, its conversions, a
-/// keyword constructor, `__repr__`, `==`, `to_dict()` and `copy()`.
+/// Defines a mirror class: the struct with every field as an attribute (of the Python type that
+/// stands for the Rust field's), its conversions, a keyword constructor, `__repr__`, `==`,
+/// `to_dict()` and `copy()`. The Rust struct's constructor in `to_rust` names every field, so
+/// the compiler rejects a mirror that misses one; the docs come from the library's table when the
+/// class is registered ([`install_docs`]).
 macro_rules! mirror {
     (
-        $(#[$doc:meta])*
         $name:ident => $rust:path {
-            $( $(#[$fdoc:meta])* $field:ident : $ty:ty ),* $(,)?
+            $( $field:ident : $ty:ty ),* $(,)?
         }
     ) => {
-        $(#[$doc])*
         #[pyclass(module = "starkrs", get_all, set_all)]
         pub struct $name {
-            $( $(#[$fdoc])* pub $field: $ty, )*
+            $( pub $field: $ty, )*
+        }
+
+        impl $crate::params::MirrorFields for $name {
+            const FIELDS: &'static [&'static str] = &[$(stringify!($field)),*];
         }
 
         impl $crate::params::Mirror for $name {
@@ -140,11 +153,6 @@ macro_rules! mirror {
                 type R = $rust;
                 Ok(R { $( $field: self.$field.to_field(py)?, )* })
             }
-        }
-
-        impl $name {
-            /// The attribute names.
-            pub const FIELDS: &'static [&'static str] = &[$(stringify!($field)),*];
         }
 
         #[pymethods]
@@ -165,7 +173,7 @@ macro_rules! mirror {
                                     "{} has no field '{}' (fields: {})",
                                     stringify!($name),
                                     k,
-                                    Self::FIELDS.join(", ")
+                                    <Self as $crate::params::MirrorFields>::FIELDS.join(", ")
                                 )))
                             }
                         }
@@ -176,7 +184,7 @@ macro_rules! mirror {
 
             fn __repr__(slf: &Bound<'_, Self>) -> PyResult<String> {
                 let mut parts = Vec::new();
-                for f in Self::FIELDS {
+                for f in <Self as $crate::params::MirrorFields>::FIELDS {
                     parts.push(format!("{}={}", f, slf.getattr(*f)?.repr()?));
                 }
                 Ok(format!("{}({})", stringify!($name), parts.join(", ")))
@@ -218,100 +226,58 @@ macro_rules! mirror {
 // ---------------------------------------------------------------------------------------------
 
 mirror! {
-    /// Newton solver settings (`settings.newton`).
     NewtonSettings => stark::solver::settings::NewtonSettings {
-        /// A step converges when the force residual falls below this, N (default: 1e-6).
         residual_tolerance_n: f64,
-        /// A step also converges when the Newton step falls below this, m/s; 0 disables it (default: 0).
         step_tolerance_m_s: f64,
-        /// Newton iterations before the step counts as failed and dt is halved (default: 100).
         max_iterations: usize,
-        /// Linear solver: "pcg" or "cholesky" (default: "pcg").
         linear_solver: Choice<stark::solver::settings::LinearSolver>,
-        /// Largest number of CG iterations per solve (default: 10000).
         cg_max_iterations: usize,
-        /// Relative CG tolerance at the first Newton iteration (default: 1e-2).
         cg_relative_tolerance: f64,
-        /// Armijo sufficient-decrease constant (default: 1e-4).
         armijo: f64,
-        /// Largest number of step halvings in the line search (default: 30).
         max_line_search_iterations: usize,
-        /// When element Hessians are projected: "always" or "on_demand" (default: "on_demand").
         projection: Choice<stark::solver::settings::Projection>,
-        /// Stand-in Hessians (sliding friction's majoriser, contact barriers' PSD form) until a
-        /// Newton step is taken in full, exact ones after (default: true).
         majorizer_far_from_solution: bool,
     }
 }
 
 mirror! {
-    /// Frame and log output (`settings.output`).
     OutputSettings => stark::solver::settings::OutputSettings {
-        /// Directory for frames and logs (default: "output").
         directory: PathBuf,
-        /// Frames per simulated second; 0 disables frames (default: 30).
         fps: f64,
-        /// Write frames (default: True).
         frames: bool,
-        /// Frame format: "vtu" (XML with fields, plus a .pvd with the times) or "legacy_vtk" (default: "vtu").
         frame_format: Choice<stark::solver::settings::FrameFormat>,
-        /// Write the per-step log `<name>.steps.jsonl`; False also turns off the body and joint logs (default: True).
         step_log: bool,
-        /// Write `<name>.bodies.jsonl` (every rigid body's pose and velocities per step) when there are rigid bodies (default: True).
         bodies_log: bool,
-        /// Write `<name>.joints.jsonl` (every joint's state per step) when there are joints (default: True).
         joints_log: bool,
     }
 }
 
 mirror! {
-    /// Contact settings (`settings.contact`).
     ContactSettings => stark::contact::ContactSettings {
-        /// Contact thickness of objects that set none, m; None: such objects take no part in contact (default: None).
         default_thickness_m: Option<f64>,
-        /// Barrier function: "log" (IPC, infinite at contact) or "cubic" (the original Stark's) (default: "log").
         barrier: Choice<stark::contact::BarrierKind>,
-        /// Barrier stiffness κ of every pair, N/m; None chooses one per pair of objects from their masses, dt and gravity (default: None).
         stiffness: Option<f64>,
-        /// κ doubles after a step in which a pair came closer than this fraction of its d̂ (default: 1e-3).
         min_distance_fraction: f64,
-        /// Upper bound of the adaptive κ relative to its initial value (default: 1e8).
         max_stiffness_factor: f64,
-        /// Relative speed below which friction sticks, m/s: a held body creeps slower than this (default: 1e-4).
         friction_stick_slide_threshold_m_s: f64,
-        /// Friction solves per step (default: 1).
         friction_iterations: usize,
-        /// Barrier pair Hessian far from the solution (exact near it): "exact", "projected", "gauss_newton" or "adaptive" (default: "adaptive").
         hessian: Choice<stark::contact::PairHessian>,
-        /// Continuous collision detection in the line search (default: True).
         ccd: bool,
     }
 }
 
 mirror! {
-    /// Everything that configures a simulation run. `Settings()` has the library's defaults.
     Settings => stark::Settings {
-        /// Name, used for output files (default: "simulation").
         name: String,
-        /// Largest (and initial) time step, s (default: 1/30).
         time_step_s: f64,
-        /// Halve dt on a failed step and grow it back after successes (default: True).
         adaptive_time_step: bool,
-        /// Smallest dt before the simulation gives up, s (default: 1e-6).
         min_time_step_s: f64,
-        /// Factor dt grows by after each successful step (default: 1.5).
         time_step_growth: f64,
-        /// Gravity, m/s² (default: (0, 0, -9.81)).
         gravity_m_s2: Arr3,
-        /// Worker threads; 0 uses all cores (default: 0).
         threads: usize,
-        /// Newton solver settings.
         newton: Py<NewtonSettings>,
-        /// Output settings.
         output: Py<OutputSettings>,
-        /// Contact settings.
         contact: Py<ContactSettings>,
-        /// Largest number of times one step is repeated after a model hardened a stiffness (default: 40).
         max_hardening_retries: usize,
     }
 }
@@ -550,13 +516,9 @@ unsafe extern "C" fn set_field<C: ParamClass>(
 // ---------------------------------------------------------------------------------------------
 
 mirror! {
-    /// Material of a rod or cable: inertia, axial strain and contact thickness.
     LineMaterial => stark::presets::LineMaterial {
-        /// Inertia (density in kg/m).
         inertia: Py<InertiaParams>,
-        /// Axial strain.
         strain: Py<SegmentStrainParams>,
-        /// Contact thickness, m; None uses settings.contact.default_thickness_m.
         contact_thickness_m: Option<f64>,
     }
 }
@@ -571,13 +533,9 @@ impl LineMaterial {
 }
 
 mirror! {
-    /// Material of a solid: inertia, volumetric strain and contact thickness.
     VolumeMaterial => stark::presets::VolumeMaterial {
-        /// Inertia (density in kg/m³).
         inertia: Py<InertiaParams>,
-        /// Volumetric strain.
         strain: Py<TetStrainParams>,
-        /// Contact thickness, m; None uses settings.contact.default_thickness_m.
         contact_thickness_m: Option<f64>,
     }
 }
@@ -651,15 +609,10 @@ impl<'py> IntoPyObject<'py> for &BendingField {
 }
 
 mirror! {
-    /// Material of a shell or cloth: inertia, membrane strain, bending and contact thickness.
     SurfaceMaterial => stark::presets::SurfaceMaterial {
-        /// Inertia (density in kg/m²).
         inertia: Py<InertiaParams>,
-        /// Membrane strain.
         strain: Py<TriangleStrainParams>,
-        /// Bending: None, FlatBendingParams or DihedralBendingParams.
         bending: BendingField,
-        /// Contact thickness, m; None uses settings.contact.default_thickness_m.
         contact_thickness_m: Option<f64>,
     }
 }
@@ -692,15 +645,52 @@ pub(crate) fn attachment_params_arg(
     }
 }
 
-/// Register the classes.
+/// Give mirror class `C` its docstring and its fields' docs from the library's table: each field's
+/// attribute becomes a `property` around pyo3's descriptor with the field's doc. The table and
+/// the class must name the same fields in the same order.
+fn install_docs<C>(ty: &Bound<'_, PyType>) -> PyResult<()>
+where
+    C: Mirror + MirrorFields + pyo3::PyTypeInfo,
+    C::Rust: Documented,
+{
+    let table: Vec<_> = C::Rust::FIELDS.iter().map(|f| f.name).collect();
+    if table != C::FIELDS {
+        return Err(PyTypeError::new_err(format!(
+            "{}: the fields {:?} differ from the library's {:?}",
+            ty.name()?,
+            C::FIELDS,
+            table
+        )));
+    }
+    ty.setattr("__doc__", doc_text(C::Rust::DOC))?;
+    let property = ty.py().import("builtins")?.getattr("property")?;
+    for f in C::Rust::FIELDS {
+        let descriptor = ty.getattr(f.name)?;
+        let wrapped = property.call1((
+            descriptor.getattr("__get__")?,
+            descriptor.getattr("__set__")?,
+            py_none(ty.py()),
+            f.doc_text(),
+        ))?;
+        ty.setattr(f.name, wrapped)?;
+    }
+    Ok(())
+}
+
+fn py_none(py: Python<'_>) -> Bound<'_, PyAny> {
+    py.None().into_bound(py)
+}
+
+/// Register the classes: settings, model parameters, materials (the lists of `param_list.rs`).
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
-    m.add_class::<Settings>()?;
-    m.add_class::<NewtonSettings>()?;
-    m.add_class::<OutputSettings>()?;
-    m.add_class::<ContactSettings>()?;
+    macro_rules! mirrors {
+        ($($name:ident => $rust:path),* $(,)?) => {$(
+            m.add_class::<$name>()?;
+            install_docs::<$name>(&m.py().get_type::<$name>())?;
+        )*};
+    }
+    crate::param_list::settings_classes!(mirrors);
     register_param_classes(m)?;
-    m.add_class::<LineMaterial>()?;
-    m.add_class::<VolumeMaterial>()?;
-    m.add_class::<SurfaceMaterial>()?;
+    crate::param_list::material_classes!(mirrors);
     Ok(())
 }

@@ -100,6 +100,71 @@ impl FieldType for bool {
     }
 }
 
+/// A field of a documented struct (settings, materials): its name, its Rust type as written
+/// and its doc comment.
+#[derive(Clone, Copy, Debug)]
+pub struct FieldText {
+    /// The Rust field name (also the serde and Python name).
+    pub name: &'static str,
+    /// The field's type as `stringify!` writes it (spacing may vary: see [`FieldText::rust_type`]).
+    pub rust_type_text: &'static str,
+    /// Its doc comment, one entry per `///` line as written.
+    pub doc: &'static [&'static str],
+}
+
+impl FieldText {
+    /// The field's type without spaces (`Option<f64>`, `[f64;3]`).
+    pub fn rust_type(&self) -> String {
+        self.rust_type_text.chars().filter(|c| !c.is_whitespace()).collect()
+    }
+
+    /// The doc comment as text.
+    pub fn doc_text(&self) -> String {
+        doc_text(self.doc)
+    }
+}
+
+/// A struct whose doc comments are known as data (implemented by [`documented_struct!`]): the
+/// settings and materials, whose Python classes and stubs take their docs from here.
+pub trait Documented {
+    /// The struct's doc comment, one entry per line.
+    const DOC: &'static [&'static str];
+    /// The fields in declaration order.
+    const FIELDS: &'static [FieldText];
+}
+
+/// Defines a struct and its [`Documented`] table (the doc comments written once, for Rust and
+/// the bindings). Fields may have any type.
+macro_rules! documented_struct {
+    (
+        $(#[doc = $doc:literal])*
+        #[derive($($derive:path),* $(,)?)]
+        $(#[serde($($serde:tt)*)])?
+        pub struct $name:ident {
+            $( $(#[doc = $fdoc:literal])* pub $field:ident : $ty:ty ),* $(,)?
+        }
+    ) => {
+        $(#[doc = $doc])*
+        #[derive($($derive),*)]
+        $(#[serde($($serde)*)])?
+        pub struct $name {
+            $( $(#[doc = $fdoc])* pub $field: $ty, )*
+        }
+
+        impl $crate::params::Documented for $name {
+            const DOC: &'static [&'static str] = &[$($doc),*];
+            const FIELDS: &'static [$crate::params::FieldText] = &[$(
+                $crate::params::FieldText {
+                    name: stringify!($field),
+                    rust_type_text: stringify!($ty),
+                    doc: &[$($fdoc),*],
+                }
+            ),*];
+        }
+    };
+}
+pub(crate) use documented_struct;
+
 /// The error of [`ParamFields::set`].
 #[doc(hidden)]
 pub fn field_error(struct_name: &str, name: &str, fields: &[FieldDoc], kind_ok: bool) -> StarkError {

@@ -45,66 +45,80 @@ class InvalidHandleError(StarkError):
 # Settings, parameters and materials: every field of the Rust struct as an attribute.
 # ------------------------------------------------------------------------------------------
 
+# <generated> Settings, parameter and material classes, from the library's tables: `cargo run -p stark-codegen --bin gen_stubs`.
+
 @final
 class Settings:
-    """Everything that configures a simulation run. `Settings()` has the library's defaults."""
+    """Everything that configures a simulation run."""
     name: str
     """Name, used for output files (default: "simulation")."""
     time_step_s: float
     """Largest (and initial) time step, s (default: 1/30)."""
     adaptive_time_step: bool
-    """Halve dt on a failed step and grow it back after successes (default: True)."""
+    """Halve dt on a failed step and grow it back after successes (default: true)."""
     min_time_step_s: float
     """Smallest dt before the simulation gives up, s (default: 1e-6)."""
     time_step_growth: float
-    """Factor dt grows by after each successful step (default: 1.5)."""
+    """Factor dt grows by after each successful step, up to `time_step_s` (default: 1.5)."""
     gravity_m_s2: NDArray[np.float64]
-    """Gravity, m/s² (default: (0, 0, -9.81))."""
+    """Gravity, m/s² (default: (0, 0, −9.81))."""
     threads: int
     """Worker threads; 0 uses all cores (default: 0)."""
     newton: NewtonSettings
-    """Newton solver settings."""
+    """Newton solver."""
     output: OutputSettings
-    """Output settings."""
+    """Output."""
     contact: ContactSettings
-    """Contact settings."""
+    """Contact."""
     max_hardening_retries: int
-    """Largest number of times one step is repeated after a model hardened a stiffness (default: 40)."""
+    """Largest number of times one step is repeated after a model hardened a stiffness
+    (default: 40)."""
     def __new__(cls, *, name: str = ..., time_step_s: float = ..., adaptive_time_step: bool = ..., min_time_step_s: float = ..., time_step_growth: float = ..., gravity_m_s2: ArrayLike = ..., threads: int = ..., newton: NewtonSettings = ..., output: OutputSettings = ..., contact: ContactSettings = ..., max_hardening_retries: int = ...) -> Settings:
         """Defaults of the library, with the given fields replaced."""
-    def validate(self) -> None:
-        """Check the values; raises `StarkError` naming the field."""
     def to_dict(self) -> dict[str, Any]:
         """The fields as a plain dict (nested settings as nested dicts)."""
     def copy(self) -> Settings:
         """A deep copy (nested settings are copied too)."""
     def __copy__(self) -> Settings: ...
     def __deepcopy__(self, memo: Any) -> Settings: ...
+    def validate(self) -> None:
+        """Check the values; raises `StarkError` naming the field."""
 
 @final
 class NewtonSettings:
-    """Newton solver settings (`settings.newton`)."""
+    """Newton solver settings."""
     residual_tolerance_n: float
-    """A step converges when the force residual falls below this, N (default: 1e-6)."""
+    """A step converges when the force residual `‖∇ᵥE‖∞ / dt` falls below this, N (or N·m for
+    rotational DOFs) (default: 1e-6, the paper's tolerance)."""
     step_tolerance_m_s: float
-    """A step also converges when the Newton step falls below this, m/s; 0 disables it (default: 0)."""
+    """A step also converges when the Newton step `‖Δv‖∞` falls below this, m/s; 0 disables it
+    (default: 0). The original Stark uses 1e-3 and its scenes rely on it."""
     max_iterations: int
     """Newton iterations before the step counts as failed and dt is halved (default: 100)."""
     linear_solver: Literal["pcg", "cholesky"]
-    """Linear solver: "pcg" or "cholesky" (default: "pcg")."""
+    """Linear solver: `pcg` (block-Jacobi preconditioned CG) or `cholesky` (default: `pcg`)."""
     cg_max_iterations: int
     """Largest number of CG iterations per solve (default: 10000)."""
     cg_relative_tolerance: float
-    """Relative CG tolerance at the first Newton iteration (default: 1e-2)."""
+    """Relative CG tolerance at the first Newton iteration; it tightens as the residual falls
+    (forcing sequence `min(this, √(r/r₀))`) (default: 1e-2)."""
     armijo: float
     """Armijo sufficient-decrease constant (default: 1e-4)."""
     max_line_search_iterations: int
     """Largest number of step halvings in the line search (default: 30)."""
     projection: Literal["always", "on_demand"]
-    """When element Hessians are projected: "always" or "on_demand" (default: "on_demand")."""
+    """When element Hessians are projected: `always` or `on_demand` (default: `on_demand`:
+    after a linear solve found the exact Hessian indefinite, for the rest of the step or
+    until the next switch to exact Hessians, see below)."""
     majorizer_far_from_solution: bool
-    """Stand-in Hessians (sliding friction's majoriser, contact barriers' PSD form) until a
-    Newton step is taken in full, exact ones after (default: true)."""
+    """Far from the solution, assemble the stand-ins that terms offer for their Hessians
+    (sliding friction: a majoriser with curvature along the slip too, so that a step cannot
+    jump across a solution that sticks; contact barriers: their positive semi-definite form),
+    and the exact Hessians once a step was taken in full (projection on demand starts over);
+    back to the stand-ins after an exact step had to be cut below a quarter. Where the exact
+    barrier Hessians make the total indefinite, their definite form until the residual fell
+    tenfold (default: true). Off: exact Hessians throughout, the barriers' definite form and
+    then projection on demand."""
     def __new__(cls, *, residual_tolerance_n: float = ..., step_tolerance_m_s: float = ..., max_iterations: int = ..., linear_solver: Literal["pcg", "cholesky"] = ..., cg_max_iterations: int = ..., cg_relative_tolerance: float = ..., armijo: float = ..., max_line_search_iterations: int = ..., projection: Literal["always", "on_demand"] = ..., majorizer_far_from_solution: bool = ...) -> NewtonSettings:
         """Defaults of the library, with the given fields replaced."""
     def to_dict(self) -> dict[str, Any]:
@@ -116,21 +130,25 @@ class NewtonSettings:
 
 @final
 class OutputSettings:
-    """Frame and log output (`settings.output`)."""
+    """Frame and log output."""
     directory: Union[str, os.PathLike[str]]
     """Directory for frames and logs (default: "output")."""
     fps: float
     """Frames per simulated second; 0 disables frames (default: 30)."""
     frames: bool
-    """Write frames (default: True)."""
+    """Write frames (default: true)."""
     frame_format: Literal["vtu", "legacy_vtk"]
-    """Frame format: "vtu" (XML with fields, plus a .pvd with the times) or "legacy_vtk" (default: "vtu")."""
+    """File format of the frames: `vtu` or `legacy_vtk` (default: `vtu`, with a `.pvd` series
+    carrying the times)."""
     step_log: bool
-    """Write the per-step log `<name>.steps.jsonl`; False also turns off the body and joint logs (default: True)."""
+    """Write the per-step log `<name>.steps.jsonl` (default: true). Off, it also turns off the
+    body and joint logs."""
     bodies_log: bool
-    """Write `<name>.bodies.jsonl` (every rigid body's pose and velocities per step) when there are rigid bodies (default: True)."""
+    """Write `<name>.bodies.jsonl`, every rigid body's pose and velocity after each step, when
+    the simulation has rigid bodies (default: true)."""
     joints_log: bool
-    """Write `<name>.joints.jsonl` (every joint's state per step) when there are joints (default: True)."""
+    """Write `<name>.joints.jsonl`, every joint's state after each step, when the simulation has
+    joints (default: true)."""
     def __new__(cls, *, directory: Union[str, os.PathLike[str]] = ..., fps: float = ..., frames: bool = ..., frame_format: Literal["vtu", "legacy_vtk"] = ..., step_log: bool = ..., bodies_log: bool = ..., joints_log: bool = ...) -> OutputSettings:
         """Defaults of the library, with the given fields replaced."""
     def to_dict(self) -> dict[str, Any]:
@@ -142,25 +160,39 @@ class OutputSettings:
 
 @final
 class ContactSettings:
-    """Contact settings (`settings.contact`)."""
+    """Contact settings (part of the simulation settings)."""
     default_thickness_m: Optional[float]
-    """Contact thickness of objects that set none, m; None: such objects take no part in contact (default: None)."""
+    """Contact thickness of objects that set none, m; objects with neither take no part in
+    contact (default: none)."""
     barrier: Literal["log", "cubic"]
-    """Barrier function: "log" (IPC, infinite at contact) or "cubic" (the original Stark's) (default: "log")."""
+    """Barrier function: `log` (IPC, infinite at contact) or `cubic` (the original Stark's)
+    (default: `log`)."""
     stiffness: Optional[float]
-    """Barrier stiffness κ of every pair, N/m; None chooses one per pair of objects from their masses, dt and gravity (default: None)."""
+    """Barrier stiffness `κ` of every pair, N/m; `None` chooses one per pair of objects from the
+    masses they carry, the time step, gravity and `d̂` (see `contact::stiffness`; default:
+    automatic)."""
     min_distance_fraction: float
-    """κ doubles after a step in which a pair came closer than this fraction of its d̂ (default: 1e-3)."""
+    """A pair of objects' `κ` doubles after a step in which one of their pairs came closer than
+    this fraction of its `d̂`, up to `max_stiffness_factor` times its initial value
+    (default: 1e-3)."""
     max_stiffness_factor: float
-    """Upper bound of the adaptive κ relative to its initial value (default: 1e8)."""
+    """Upper bound of the adaptive `κ` relative to its initial value (default: 1e8)."""
     friction_stick_slide_threshold_m_s: float
-    """Relative speed below which friction sticks, m/s: a held body creeps slower than this (default: 1e-4)."""
+    """Relative speed below which friction sticks (the smoothing `ε_v`), m/s (default: 1e-4: a
+    body held below its friction limit creeps slower than this, and a grasp slips within a
+    few percent of μN; 1e-3 costs fewer Newton iterations on cloth, see BENCHMARKS.md, but
+    lets force-limited jaws slip early, at 0.85 μN)."""
     friction_iterations: int
-    """Friction solves per step (default: 1)."""
+    """Friction solves per step: 1 lags normal forces and tangents once from the start of the
+    step; more re-lag them from the converged state and solve again (default: 1)."""
     hessian: Literal["exact", "projected", "gauss_newton", "adaptive"]
-    """Barrier pair Hessian far from the solution (exact near it): "exact", "projected", "gauss_newton" or "adaptive" (default: "adaptive")."""
+    """Positive semi-definite Hessian used for barrier pairs far from the solution and whenever
+    the solver projects: `exact`, `projected`, `gauss_newton` or `adaptive` (default:
+    `adaptive`); near the solution (once Newton took a full step, see
+    `NewtonSettings::majorizer_far_from_solution`) the pairs take their exact Hessian."""
     ccd: bool
-    """Continuous collision detection in the line search (default: True)."""
+    """Continuous collision detection in the line search (default: true). Without it only the
+    barrier keeps pairs apart, which fast motion can tunnel through."""
     def __new__(cls, *, default_thickness_m: Optional[float] = ..., barrier: Literal["log", "cubic"] = ..., stiffness: Optional[float] = ..., min_distance_fraction: float = ..., max_stiffness_factor: float = ..., friction_stick_slide_threshold_m_s: float = ..., friction_iterations: int = ..., hessian: Literal["exact", "projected", "gauss_newton", "adaptive"] = ..., ccd: bool = ...) -> ContactSettings:
         """Defaults of the library, with the given fields replaced."""
     def to_dict(self) -> dict[str, Any]:
@@ -169,8 +201,6 @@ class ContactSettings:
         """A deep copy (nested settings are copied too)."""
     def __copy__(self) -> ContactSettings: ...
     def __deepcopy__(self, memo: Any) -> ContactSettings: ...
-
-# <generated> Parameter classes, from the library's field tables: `cargo run -p stark-codegen --bin gen_stubs`.
 
 @final
 class InertiaParams:
@@ -368,17 +398,15 @@ class JointParams:
     def __copy__(self) -> JointParams: ...
     def __deepcopy__(self, memo: Any) -> JointParams: ...
 
-# </generated>
-
 @final
 class LineMaterial:
-    """Material of a rod or cable: inertia, axial strain and contact thickness."""
+    """Material of a rod or cable made of segments."""
     inertia: InertiaParams
     """Inertia (density in kg/m)."""
     strain: SegmentStrainParams
     """Axial strain."""
     contact_thickness_m: Optional[float]
-    """Contact thickness, m; None uses settings.contact.default_thickness_m."""
+    """Contact thickness, m; `None` uses `settings.contact.default_thickness_m` (default: none)."""
     def __new__(cls, *, inertia: InertiaParams = ..., strain: SegmentStrainParams = ..., contact_thickness_m: Optional[float] = ...) -> LineMaterial:
         """Defaults of the library, with the given fields replaced."""
     def to_dict(self) -> dict[str, Any]:
@@ -393,13 +421,13 @@ class LineMaterial:
 
 @final
 class VolumeMaterial:
-    """Material of a solid: inertia, volumetric strain and contact thickness."""
+    """Material of a volumetric solid made of tetrahedra."""
     inertia: InertiaParams
     """Inertia (density in kg/m³)."""
     strain: TetStrainParams
     """Volumetric strain."""
     contact_thickness_m: Optional[float]
-    """Contact thickness, m; None uses settings.contact.default_thickness_m."""
+    """Contact thickness, m; `None` uses `settings.contact.default_thickness_m` (default: none)."""
     def __new__(cls, *, inertia: InertiaParams = ..., strain: TetStrainParams = ..., contact_thickness_m: Optional[float] = ...) -> VolumeMaterial:
         """Defaults of the library, with the given fields replaced."""
     def to_dict(self) -> dict[str, Any]:
@@ -414,15 +442,16 @@ class VolumeMaterial:
 
 @final
 class SurfaceMaterial:
-    """Material of a shell or cloth: inertia, membrane strain, bending and contact thickness."""
+    """Material of a shell or cloth made of triangles."""
     inertia: InertiaParams
     """Inertia (density in kg/m²)."""
     strain: TriangleStrainParams
     """Membrane strain."""
     bending: Union[FlatBendingParams, DihedralBendingParams, None]
-    """Bending: None, FlatBendingParams or DihedralBendingParams."""
+    """Bending: none, flat (cloth, towards the flat state) or dihedral (curved shells, towards
+    the rest shape) (default: flat)."""
     contact_thickness_m: Optional[float]
-    """Contact thickness, m; None uses settings.contact.default_thickness_m."""
+    """Contact thickness, m; `None` uses `settings.contact.default_thickness_m` (default: none)."""
     def __new__(cls, *, inertia: InertiaParams = ..., strain: TriangleStrainParams = ..., bending: Union[FlatBendingParams, DihedralBendingParams, None] = ..., contact_thickness_m: Optional[float] = ...) -> SurfaceMaterial:
         """Defaults of the library, with the given fields replaced."""
     def to_dict(self) -> dict[str, Any]:
@@ -435,6 +464,7 @@ class SurfaceMaterial:
     def cotton_fabric() -> SurfaceMaterial:
         """Cotton fabric: 0.2 kg/m², 1 mm thick, E = 5e3 Pa, ν = 0.3, strain limit 10%, flat bending 1e-6 N·m."""
 
+# </generated>
 
 # ------------------------------------------------------------------------------------------
 # Handles: small immutable objects naming a part of one simulation.

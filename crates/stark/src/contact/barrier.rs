@@ -15,8 +15,9 @@ use crate::energy::Scalar;
 use serde::{Deserialize, Serialize};
 
 /// Which barrier function contact uses.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, strum::VariantNames)]
 #[serde(rename_all = "snake_case")]
+#[strum(serialize_all = "snake_case")]
 pub enum BarrierKind {
     /// IPC log barrier, infinite at contact (default).
     Log,

@@ -34,40 +34,44 @@ use serde::{Deserialize, Serialize};
 use stiffness::PairStiffness;
 use validity::RigidSplit;
 
-/// Contact settings (part of the simulation settings).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct ContactSettings {
-    /// Contact thickness of objects that set none, m; objects with neither take no part in
-    /// contact (default: none).
-    pub default_thickness_m: Option<f64>,
-    /// Barrier function (default: log, infinite at contact).
-    pub barrier: BarrierKind,
-    /// Barrier stiffness `κ` of every pair, N/m; `None` chooses one per pair of objects from the
-    /// masses they carry, the time step, gravity and `d̂` (see `contact::stiffness`; default:
-    /// automatic).
-    pub stiffness: Option<f64>,
-    /// A pair of objects' `κ` doubles after a step in which one of their pairs came closer than
-    /// this fraction of its `d̂`, up to `max_stiffness_factor` times its initial value
-    /// (default: 1e-3).
-    pub min_distance_fraction: f64,
-    /// Upper bound of the adaptive `κ` relative to its initial value (default: 1e8).
-    pub max_stiffness_factor: f64,
-    /// Relative speed below which friction sticks (the smoothing `ε_v`), m/s (default: 1e-4: a
-    /// body held below its friction limit creeps slower than this, and a grasp slips within a
-    /// few percent of μN; 1e-3 costs fewer Newton iterations on cloth, see BENCHMARKS.md, but
-    /// lets force-limited jaws slip early, at 0.85 μN).
-    pub friction_stick_slide_threshold_m_s: f64,
-    /// Friction solves per step: 1 lags normal forces and tangents once from the start of the
-    /// step; more re-lag them from the converged state and solve again (default: 1).
-    pub friction_iterations: usize,
-    /// Positive semi-definite Hessian used for barrier pairs far from the solution and whenever
-    /// the solver projects (default: adaptive); near the solution (once Newton took a full step,
-    /// see `NewtonSettings::majorizer_far_from_solution`) the pairs take their exact Hessian.
-    pub hessian: PairHessian,
-    /// Continuous collision detection in the line search (default: true). Without it only the
-    /// barrier keeps pairs apart, which fast motion can tunnel through.
-    pub ccd: bool,
+crate::params::documented_struct! {
+    /// Contact settings (part of the simulation settings).
+    #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+    #[serde(default, deny_unknown_fields)]
+    pub struct ContactSettings {
+        /// Contact thickness of objects that set none, m; objects with neither take no part in
+        /// contact (default: none).
+        pub default_thickness_m: Option<f64>,
+        /// Barrier function: `log` (IPC, infinite at contact) or `cubic` (the original Stark's)
+        /// (default: `log`).
+        pub barrier: BarrierKind,
+        /// Barrier stiffness `κ` of every pair, N/m; `None` chooses one per pair of objects from the
+        /// masses they carry, the time step, gravity and `d̂` (see `contact::stiffness`; default:
+        /// automatic).
+        pub stiffness: Option<f64>,
+        /// A pair of objects' `κ` doubles after a step in which one of their pairs came closer than
+        /// this fraction of its `d̂`, up to `max_stiffness_factor` times its initial value
+        /// (default: 1e-3).
+        pub min_distance_fraction: f64,
+        /// Upper bound of the adaptive `κ` relative to its initial value (default: 1e8).
+        pub max_stiffness_factor: f64,
+        /// Relative speed below which friction sticks (the smoothing `ε_v`), m/s (default: 1e-4: a
+        /// body held below its friction limit creeps slower than this, and a grasp slips within a
+        /// few percent of μN; 1e-3 costs fewer Newton iterations on cloth, see BENCHMARKS.md, but
+        /// lets force-limited jaws slip early, at 0.85 μN).
+        pub friction_stick_slide_threshold_m_s: f64,
+        /// Friction solves per step: 1 lags normal forces and tangents once from the start of the
+        /// step; more re-lag them from the converged state and solve again (default: 1).
+        pub friction_iterations: usize,
+        /// Positive semi-definite Hessian used for barrier pairs far from the solution and whenever
+        /// the solver projects: `exact`, `projected`, `gauss_newton` or `adaptive` (default:
+        /// `adaptive`); near the solution (once Newton took a full step, see
+        /// `NewtonSettings::majorizer_far_from_solution`) the pairs take their exact Hessian.
+        pub hessian: PairHessian,
+        /// Continuous collision detection in the line search (default: true). Without it only the
+        /// barrier keeps pairs apart, which fast motion can tunnel through.
+        pub ccd: bool,
+    }
 }
 
 impl Default for ContactSettings {

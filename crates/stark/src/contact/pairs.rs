@@ -214,8 +214,9 @@ fn distance_kernel(kind: Distance) -> crate::energy::Kernel {
 }
 
 /// Which Hessian of a pair's barrier energy to assemble.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, strum::VariantNames)]
 #[serde(rename_all = "snake_case")]
+#[strum(serialize_all = "snake_case")]
 pub enum PairHessian {
     /// The exact Hessian (indefinite near contact; for tests).
     Exact,

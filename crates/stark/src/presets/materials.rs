@@ -18,44 +18,49 @@ pub enum Bending {
     Dihedral(DihedralBendingParams),
 }
 
-/// Material of a rod or cable made of segments.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-#[derive(Default)]
-pub struct LineMaterial {
-    /// Inertia (density in kg/m).
-    pub inertia: InertiaParams,
-    /// Axial strain.
-    pub strain: SegmentStrainParams,
-    /// Contact thickness, m; `None` uses `settings.contact.default_thickness_m` (default: none).
-    pub contact_thickness_m: Option<f64>,
+crate::params::documented_struct! {
+    /// Material of a rod or cable made of segments.
+    #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, Default)]
+    #[serde(default, deny_unknown_fields)]
+    pub struct LineMaterial {
+        /// Inertia (density in kg/m).
+        pub inertia: InertiaParams,
+        /// Axial strain.
+        pub strain: SegmentStrainParams,
+        /// Contact thickness, m; `None` uses `settings.contact.default_thickness_m` (default: none).
+        pub contact_thickness_m: Option<f64>,
+    }
 }
 
-/// Material of a shell or cloth made of triangles.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct SurfaceMaterial {
-    /// Inertia (density in kg/m²).
-    pub inertia: InertiaParams,
-    /// Membrane strain.
-    pub strain: TriangleStrainParams,
-    /// Bending.
-    pub bending: Bending,
-    /// Contact thickness, m; `None` uses `settings.contact.default_thickness_m` (default: none).
-    pub contact_thickness_m: Option<f64>,
+crate::params::documented_struct! {
+    /// Material of a shell or cloth made of triangles.
+    #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+    #[serde(default, deny_unknown_fields)]
+    pub struct SurfaceMaterial {
+        /// Inertia (density in kg/m²).
+        pub inertia: InertiaParams,
+        /// Membrane strain.
+        pub strain: TriangleStrainParams,
+        /// Bending: none, flat (cloth, towards the flat state) or dihedral (curved shells, towards
+        /// the rest shape) (default: flat).
+        pub bending: Bending,
+        /// Contact thickness, m; `None` uses `settings.contact.default_thickness_m` (default: none).
+        pub contact_thickness_m: Option<f64>,
+    }
 }
 
-/// Material of a volumetric solid made of tetrahedra.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-#[derive(Default)]
-pub struct VolumeMaterial {
-    /// Inertia (density in kg/m³).
-    pub inertia: InertiaParams,
-    /// Volumetric strain.
-    pub strain: TetStrainParams,
-    /// Contact thickness, m; `None` uses `settings.contact.default_thickness_m` (default: none).
-    pub contact_thickness_m: Option<f64>,
+crate::params::documented_struct! {
+    /// Material of a volumetric solid made of tetrahedra.
+    #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, Default)]
+    #[serde(default, deny_unknown_fields)]
+    pub struct VolumeMaterial {
+        /// Inertia (density in kg/m³).
+        pub inertia: InertiaParams,
+        /// Volumetric strain.
+        pub strain: TetStrainParams,
+        /// Contact thickness, m; `None` uses `settings.contact.default_thickness_m` (default: none).
+        pub contact_thickness_m: Option<f64>,
+    }
 }
 
 impl Default for SurfaceMaterial {

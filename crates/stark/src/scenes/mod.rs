@@ -215,6 +215,18 @@ fn builtin_scenes_without_suites() -> Vec<BuiltinScene> {
             build: franka_cup_scene,
         },
         BuiltinScene {
+            name: "franka_cup_pet",
+            description: "franka_cup with the bending stiffness of a real 0.3 mm PET sheet (4.7e-3 N·m instead of 1e-4): the tapered wall as a wedge, without the pads' indentation",
+            duration_s: franka_cup::DURATION_S,
+            build: |s| franka_cup_variant(s, "franka_cup_pet", franka_cup::PET_BENDING_N_M, false),
+        },
+        BuiltinScene {
+            name: "franka_cup_straight",
+            description: "franka_cup with a straight wall (radius 27 mm top and bottom): the pads' indentation without the wedge",
+            duration_s: franka_cup::DURATION_S,
+            build: |s| franka_cup_variant(s, "franka_cup_straight", franka_cup::CUP_BENDING_N_M, true),
+        },
+        BuiltinScene {
             name: "franka_rigid_box",
             description: "The check of franka_cup: a rigid 50 g box in the same hand, pulled down by a force growing at 1 N/s, slips at μ·ΣN",
             duration_s: 4.0,
@@ -235,6 +247,24 @@ pub fn franka_cup_scene(mut settings: Settings) -> Result<Simulation> {
     settings.time_step_s = 0.005;
     settings.newton.residual_tolerance_n = 1e-6;
     Ok(franka_cup::build(settings, franka_cup::FrankaCupOptions::default())?.0)
+}
+
+/// The variants of [`franka_cup`] that separate the wedge of the tapered wall from the pads'
+/// indentation of a soft one: another bending stiffness (N·m), a straight wall.
+pub fn franka_cup_variant(mut settings: Settings, name: &str, bending_n_m: f64, straight: bool) -> Result<Simulation> {
+    settings.name = name.into();
+    settings.time_step_s = 0.005;
+    settings.newton.residual_tolerance_n = 1e-6;
+    let mut shape = crate::presets::meshes::CupShape::default();
+    if straight {
+        shape.bottom_radius_m = shape.rim_radius_m;
+    }
+    let options = franka_cup::FrankaCupOptions {
+        held: franka_cup::Held::Cup(shape),
+        cup_bending_n_m: bending_n_m,
+        ..Default::default()
+    };
+    Ok(franka_cup::build(settings, options)?.0)
 }
 
 /// The built-in `franka_rigid_box`: [`franka_cup`] with a rigid box pulled down instead of the cup.
