@@ -36,9 +36,20 @@ impl GraspRun {
 
     /// After every step: draw the state when the grasp slips.
     pub fn after_step(&mut self, sim: &Simulation) {
-        if self.watch.update(sim) {
-            let title = format!("{}: the grasp slips at t = {:.3} s", sim.settings.name, sim.time());
-            draw_state(sim, "slip", &title);
+        match self.watch.update(sim) {
+            Some(franka_cup::GraspEvent::Slip) => {
+                let title = format!("{}: the grasp slips at t = {:.3} s", sim.settings.name, sim.time());
+                draw_state(sim, "slip", &title);
+            }
+            Some(franka_cup::GraspEvent::Break) => {
+                let title = format!(
+                    "{}: static grasping breaks at t = {:.3} s",
+                    sim.settings.name,
+                    sim.time()
+                );
+                draw_state(sim, "break", &title);
+            }
+            None => {}
         }
     }
 
@@ -124,6 +135,22 @@ fn print_outcome(o: &GraspOutcome) {
             a.load_n,
             a.capacity_n,
             1e3 * o.final_drop_m
+        ),
+    }
+    match (o.break_time_s, &o.at_break) {
+        (Some(t), Some(b)) => println!(
+            "static grasp          broke at t = {t:.3} s ({} balls in the cup; sliding faster than {} mm/s): load {:.3} N, \
+             friction {:.3} N against μ·ΣN = {:.3} N, load {:+.1}% over μ·ΣN",
+            b.balls_in_cup,
+            1e3 * franka_cup::BREAK_SPEED_M_S,
+            b.load_n,
+            b.friction_on_held_n,
+            b.capacity_n,
+            100.0 * (b.load_n / b.capacity_n - 1.0)
+        ),
+        _ => println!(
+            "static grasp          never slid faster than {} mm/s",
+            1e3 * franka_cup::BREAK_SPEED_M_S
         ),
     }
     println!(

@@ -417,8 +417,15 @@ impl Simulation {
             name: name.to_string(),
             record: Box::new(move |sim| serde_json::to_value(record(sim)).expect("serialisable probe record")),
             log: None,
+            last: None,
         });
         Ok(())
+    }
+
+    /// The record probe `name` wrote after the last step (None before the first step, when step
+    /// logs are off, or if there is no such probe).
+    pub fn last_probe_record(&self, name: &str) -> Option<&serde_json::Value> {
+        self.output.probes.iter().find(|p| p.name == name)?.last.as_ref()
     }
 
     /// Append the current body and joint states to their logs (those that are open).
@@ -448,7 +455,9 @@ impl Simulation {
             let mut line = serde_json::Map::new();
             line.insert("step".into(), step.into());
             line.insert("time_s".into(), time_s.into());
-            line.insert(p.name.clone(), (p.record)(self));
+            let record = (p.record)(self);
+            line.insert(p.name.clone(), record.clone());
+            p.last = Some(record);
             result = write_line(&mut p.log, "probe log", &line);
             // Flushed every step: scenes read their probes while running (outcomes, plots).
             if let (Ok(()), Some(log)) = (&result, &mut p.log) {
@@ -469,6 +478,8 @@ pub(crate) struct Probe {
     #[allow(clippy::type_complexity)]
     record: Box<dyn Fn(&Simulation) -> serde_json::Value + Send>,
     log: Option<std::io::BufWriter<std::fs::File>>,
+    /// The record of the last step written.
+    last: Option<serde_json::Value>,
 }
 
 #[cfg(test)]

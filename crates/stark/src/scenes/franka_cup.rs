@@ -61,6 +61,18 @@ pub const MU_BALL: f64 = 0.3;
 pub const PROBE: &str = "grasp";
 /// The cup slips when it has moved this far down relative to the jaws since the pour began, m.
 pub const SLIP_M: f64 = 1e-3;
+/// Static grasping breaks when the held object first slides down relative to the jaws faster
+/// than this, m/s (over [`BREAK_WINDOW_S`]), while the jaws' friction is at its Coulomb limit
+/// (at least [`BREAK_FRICTION_FRACTION`] of μ·ΣN): ten times the friction's stick threshold
+/// `ε_v` (1e-4 m/s), below which a held object creeps. (The friction condition tells a slide
+/// from the jolt of a ball landing on the cup's bottom, which moves the cup's mean height as
+/// fast while the jaws' friction is far from its limit.)
+pub const BREAK_SPEED_M_S: f64 = 1e-3;
+/// See [`BREAK_SPEED_M_S`]: part of the jaws' friction may act sideways, so the vertical
+/// friction of a sliding grasp is a little below μ·ΣN.
+pub const BREAK_FRICTION_FRACTION: f64 = 0.95;
+/// The window over which the sliding speed is measured, s (two 5 ms steps).
+pub const BREAK_WINDOW_S: f64 = 0.01;
 
 /// Initial opening of each finger, m (70 mm between the jaws).
 const FINGER_OPEN_M: f64 = 0.035;
@@ -529,6 +541,11 @@ pub struct GraspOutcome {
     pub slip_time_s: Option<f64>,
     /// The sample at the slip (or at the end of the log).
     pub at: GraspSample,
+    /// The first time after the reference that the held object slides down relative to the
+    /// jaws faster than [`BREAK_SPEED_M_S`] (static grasping breaks), s; `None`: it never did.
+    pub break_time_s: Option<f64>,
+    /// The sample when static grasping breaks.
+    pub at_break: Option<GraspSample>,
     /// Load over capacity at the slip (or at the end).
     pub load_over_capacity: f64,
     /// The largest load over capacity while it held (before the slip), and when, s.
@@ -541,6 +558,11 @@ pub struct GraspOutcome {
 struct ProbeLine {
     time_s: f64,
     grasp: GraspSample,
+}
+
+/// The jaws' vertical friction is at its Coulomb limit (see [`BREAK_SPEED_M_S`]).
+fn at_friction_limit(s: &GraspSample) -> bool {
+    s.capacity_n > 0.0 && s.friction_on_held_n >= BREAK_FRICTION_FRACTION * s.capacity_n
 }
 
 /// Read a probe log and find the slip (see [`GraspOutcome`]); `pour_start_s` from the options.
@@ -564,6 +586,23 @@ pub fn grasp_outcome(log: &Path, pour_start_s: f64) -> Result<GraspOutcome> {
     let slip = lines
         .iter()
         .find(|l| l.time_s > reference.time_s && rel0 - rel(&l.grasp) > SLIP_M);
+    // The sliding speed over the window ending at each line (`j` trails `i`).
+    let mut broken = None;
+    let mut j = 0;
+    for (i, l) in lines.iter().enumerate() {
+        while j < i && lines[j + 1].time_s <= l.time_s - BREAK_WINDOW_S + 1e-9 {
+            j += 1;
+        }
+        let window_s = l.time_s - lines[j].time_s;
+        if l.time_s > reference.time_s
+            && window_s > 0.5 * BREAK_WINDOW_S
+            && (rel(&lines[j].grasp) - rel(&l.grasp)) / window_s > BREAK_SPEED_M_S
+            && at_friction_limit(&l.grasp)
+        {
+            broken = Some(&lines[i]);
+            break;
+        }
+    }
     let last = lines.last().expect("the reference is a line");
     let at = slip.unwrap_or(last);
     let ratio = |s: &GraspSample| {
@@ -583,6 +622,8 @@ pub fn grasp_outcome(log: &Path, pour_start_s: f64) -> Result<GraspOutcome> {
         reference_height_m: rel0,
         slip_time_s: slip.map(|l| l.time_s),
         at: at.grasp.clone(),
+        break_time_s: broken.map(|l| l.time_s),
+        at_break: broken.map(|l| l.grasp.clone()),
         load_over_capacity: ratio(&at.grasp),
         max_held_ratio,
         final_drop_m: rel0 - rel(&last.grasp),
@@ -599,6 +640,18 @@ pub struct SlipWatch {
     /// Height of the held object relative to the jaws at the last step before the pour, m.
     reference_m: Option<f64>,
     slipped: bool,
+    broke: bool,
+    /// The relative heights over the last [`BREAK_WINDOW_S`]: (time, height), s and m.
+    recent: std::collections::VecDeque<(f64, f64)>,
+}
+
+/// What [`SlipWatch::update`] saw at a step.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GraspEvent {
+    /// Static grasping broke: the held object first slid faster than [`BREAK_SPEED_M_S`].
+    Break,
+    /// The held object first reached [`SLIP_M`] below its height before the pour.
+    Slip,
 }
 
 impl SlipWatch {
@@ -618,6 +671,8 @@ impl SlipWatch {
             held,
             reference_m: None,
             slipped: false,
+            broke: false,
+            recent: Default::default(),
         })
     }
 
@@ -629,6 +684,7 @@ impl SlipWatch {
             if let Ok(outcome) = grasp_outcome(log, self.pour_start_s) {
                 self.reference_m = Some(outcome.reference_height_m);
                 self.slipped = outcome.slip_time_s.is_some();
+                self.broke = outcome.break_time_s.is_some();
             }
         }
         Ok(())
@@ -646,20 +702,77 @@ impl SlipWatch {
         held - jaw
     }
 
-    /// Call after every step: `true` at the step where the held object has first moved
-    /// [`SLIP_M`] down relative to the jaws since the pour began.
-    pub fn update(&mut self, sim: &Simulation) -> bool {
+    /// Call after every step: the event of this step, if any ([`GraspEvent::Slip`] wins when
+    /// both come at once; each comes once). The break needs the step's probe record (the jaws'
+    /// friction), so step logs must be on.
+    pub fn update(&mut self, sim: &Simulation) -> Option<GraspEvent> {
         let rel = self.relative_height(sim);
-        if sim.time() < self.pour_start_s {
+        let t = sim.time();
+        self.recent.push_back((t, rel));
+        while self.recent.len() > 1 && self.recent[1].0 <= t - BREAK_WINDOW_S + 1e-9 {
+            self.recent.pop_front();
+        }
+        if t < self.pour_start_s {
             self.reference_m = Some(rel);
-            return false;
+            return None;
         }
-        match self.reference_m {
-            Some(r) if !self.slipped && r - rel > SLIP_M => {
-                self.slipped = true;
-                true
+        let reference = self.reference_m?;
+        if !self.slipped && reference - rel > SLIP_M {
+            self.slipped = true;
+            self.broke = true;
+            return Some(GraspEvent::Slip);
+        }
+        let (t0, rel0) = self.recent[0];
+        let window_s = t - t0;
+        let at_limit = || {
+            sim.last_probe_record(PROBE)
+                .and_then(|r| serde_json::from_value::<GraspSample>(r.clone()).ok())
+                .is_some_and(|s| at_friction_limit(&s))
+        };
+        if !self.broke && window_s > 0.5 * BREAK_WINDOW_S && (rel0 - rel) / window_s > BREAK_SPEED_M_S && at_limit() {
+            self.broke = true;
+            return Some(GraspEvent::Break);
+        }
+        None
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A probe log of a held object that creeps (at `ε_v`), then slides at 3 mm/s from 2.0 s for
+    /// 0.1 s and then holds again: static grasping breaks at the slide, the 1 mm slip is never
+    /// reached.
+    #[test]
+    fn the_grasp_breaks_where_the_object_slides_not_where_it_creeps() {
+        let dir = tempfile::tempdir().unwrap();
+        let log = dir.path().join("x.grasp.jsonl");
+        let mut text = String::new();
+        let mut z = 0.05;
+        for step in 0..500 {
+            let t = 0.005 * (step + 1) as f64;
+            if t > 1.2 {
+                z -= 0.005 * if (2.0..2.1).contains(&t) { 3e-3 } else { 1e-4 };
             }
-            _ => false,
+            let sample = GraspSample {
+                capacity_n: 2.5,
+                load_n: 1.0 + t,
+                held_z_m: z,
+                jaw_z_m: 0.1,
+                ..Default::default()
+            };
+            let line = serde_json::json!({"time_s": t, "grasp": sample, "step": step});
+            text.push_str(&format!("{line}\n"));
         }
+        std::fs::write(&log, text).unwrap();
+        let o = grasp_outcome(&log, 1.2).unwrap();
+        let t = o.break_time_s.expect("it slid");
+        assert!((2.0..2.02).contains(&t), "broke at {t}");
+        assert!((o.at_break.unwrap().load_n - (1.0 + t)).abs() < 1e-12);
+        assert_eq!(
+            o.slip_time_s, None,
+            "0.3 mm of slide and 0.13 mm of creep stay below 1 mm"
+        );
     }
 }
