@@ -63,13 +63,16 @@ impl GraspRun {
         if let Some(png) = draw_state(sim, "final", &title) {
             println!("final state           {}", png.display());
         }
-        match franka_cup::grasp_outcome(&log, self.pour_start_s) {
-            Ok(o) => print_outcome(&o),
+        let outcome = match franka_cup::grasp_outcome(&log, self.pour_start_s) {
+            Ok(o) => {
+                print_outcome(&o);
+                o
+            }
             Err(e) => {
                 eprintln!("warning: no grasp outcome: {e}");
                 return;
             }
-        }
+        };
         let png = sim
             .settings
             .output
@@ -85,7 +88,20 @@ impl GraspRun {
             "grasp.held_z_m",
         ]
         .map(String::from);
-        match plot::plot_logs(&[log], &series, Some(&png)) {
+        let mut marks = Vec::new();
+        if let Some(t) = outcome.break_time_s {
+            marks.push(plot::Mark {
+                time_s: t,
+                label: format!(" static grasp breaks, t = {t:.3} s"),
+            });
+        }
+        if let Some(t) = outcome.slip_time_s {
+            marks.push(plot::Mark {
+                time_s: t,
+                label: format!(" slip (1 mm), t = {t:.3} s"),
+            });
+        }
+        match plot::plot_logs_marked(&[log], &series, &marks, Some(&png)) {
             Ok(p) => println!("grasp plot            {}", p.display()),
             Err(e) => eprintln!("warning: no grasp plot: {e}"),
         }
@@ -119,8 +135,8 @@ fn print_outcome(o: &GraspOutcome) {
     let sum_n = a.normal_force_n[0] + a.normal_force_n[1];
     match o.slip_time_s {
         Some(t) => println!(
-            "grasp                 slipped at t = {t:.3} s ({} balls in the cup): load {:.3} N against a friction capacity \
-             μ·ΣN = {:.3} N (ΣN = {:.3} + {:.3} = {sum_n:.3} N), {:+.1}%; the paper: 20 balls, 2.8 N against 2.5 N (+12%)",
+            "grasp                 slipped 1 mm at t = {t:.3} s ({} balls in the cup): load {:.3} N against a friction \
+             capacity μ·ΣN = {:.3} N (ΣN = {:.3} + {:.3} = {sum_n:.3} N), {:+.1}%",
             a.balls_in_cup,
             a.load_n,
             a.capacity_n,
@@ -140,7 +156,8 @@ fn print_outcome(o: &GraspOutcome) {
     match (o.break_time_s, &o.at_break) {
         (Some(t), Some(b)) => println!(
             "static grasp          broke at t = {t:.3} s ({} balls in the cup; sliding faster than {} mm/s): load {:.3} N, \
-             friction {:.3} N against μ·ΣN = {:.3} N, load {:+.1}% over μ·ΣN",
+             friction {:.3} N against μ·ΣN = {:.3} N, load {:+.1}% over μ·ΣN; the paper: 20 balls, 2.8 N against \
+             2.5 N (+12%)",
             b.balls_in_cup,
             1e3 * franka_cup::BREAK_SPEED_M_S,
             b.load_n,

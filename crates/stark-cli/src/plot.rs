@@ -171,7 +171,19 @@ fn default_keys(lines: &[(f64, Value)]) -> Vec<String> {
 }
 
 /// Draw `series`, one panel each (residuals on a log scale), into `png`.
+/// A moment marked on every panel of a plot: a vertical line at `time_s`, its label on the first.
+pub struct Mark {
+    /// Time, s.
+    pub time_s: f64,
+    /// Label.
+    pub label: String,
+}
+
 fn draw(series: &[Series], title: &str, png: &Path) -> Result<()> {
+    draw_marked(series, title, &[], png)
+}
+
+fn draw_marked(series: &[Series], title: &str, marks: &[Mark], png: &Path) -> Result<()> {
     register_font();
     if series.is_empty() {
         return Err(StarkError::InvalidInput("nothing to plot".into()));
@@ -250,6 +262,24 @@ fn draw(series: &[Series], title: &str, png: &Path) -> Result<()> {
                 .y_desc(&s.name)
                 .draw()
                 .map_err(|e| plot_err(png, e))?;
+            for m in marks {
+                let red = RGBColor(220, 0, 0);
+                chart
+                    .draw_series(LineSeries::new(
+                        [(m.time_s, lo - pad), (m.time_s, hi + pad)],
+                        red.stroke_width(1),
+                    ))
+                    .map_err(|e| plot_err(png, e))?;
+                if i == 0 {
+                    chart
+                        .draw_series(std::iter::once(Text::new(
+                            m.label.clone(),
+                            (m.time_s, hi + 0.5 * pad),
+                            ("sans-serif", 14).into_font().color(&red),
+                        )))
+                        .map_err(|e| plot_err(png, e))?;
+                }
+            }
             chart
                 .draw_series(LineSeries::new(finite.iter().copied(), colour.stroke_width(2)))
                 .map(|_| ())
@@ -263,6 +293,11 @@ fn draw(series: &[Series], title: &str, png: &Path) -> Result<()> {
 /// `stark plot`: the named series (or a default set) of each log against time into one PNG;
 /// returns the file written.
 pub fn plot_logs(logs: &[PathBuf], keys: &[String], output: Option<&Path>) -> Result<PathBuf> {
+    plot_logs_marked(logs, keys, &[], output)
+}
+
+/// [`plot_logs`] with moments marked on every panel (lines on linear panels).
+pub fn plot_logs_marked(logs: &[PathBuf], keys: &[String], marks: &[Mark], output: Option<&Path>) -> Result<PathBuf> {
     let mut all = Vec::new();
     for log in logs {
         let lines = read_log(log)?;
@@ -292,7 +327,7 @@ pub fn plot_logs(logs: &[PathBuf], keys: &[String], output: Option<&Path>) -> Re
         })
         .collect::<Vec<_>>()
         .join(", ");
-    draw(&all, &title, &png)?;
+    draw_marked(&all, &title, marks, &png)?;
     Ok(png)
 }
 

@@ -217,10 +217,12 @@ fn classify_robot_towel(py: Python<'_>, log: PathBuf) -> PyResult<Bound<'_, PyAn
     py.import("json")?.call_method1("loads", (text,))
 }
 
-/// The grasp's slip from a `franka_cup` (or `franka_rigid_box`) probe log
-/// (`<out>/<scene>.grasp.jsonl`), as `stark run` reports it: a dict with `reference_time_s`,
-/// `slip_time_s` (None: it held), `at` (the readouts at the slip, or at the end),
-/// `load_over_capacity`, `max_held_ratio` and `final_drop_m`.
+/// The grasp's break and slip from a `franka_cup` (or `franka_rigid_box`) probe log
+/// (`<out>/<scene>.grasp.jsonl`), as `stark run` reports them: a dict with `reference_time_s`,
+/// `break_time_s` and `at_break` (when static grasping broke: the cup slid faster than 1 mm/s
+/// with the jaws' friction at μ·ΣN; None: it never did), `slip_time_s` (the 1 mm slip; None: it
+/// held), `at` (the readouts at the slip, or at the end), `load_over_capacity`, `max_held_ratio`
+/// and `final_drop_m`.
 #[pyfunction]
 #[pyo3(signature = (log, pour_start_s=1.2))]
 fn grasp_outcome(py: Python<'_>, log: PathBuf, pour_start_s: f64) -> PyResult<Bound<'_, PyAny>> {

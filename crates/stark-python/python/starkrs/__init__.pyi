@@ -1419,9 +1419,12 @@ def builtin_scene(name: str, settings: Optional[Settings] = None) -> Scene:
     """Build the built-in scene `name`; `settings` provides the base settings."""
 
 def grasp_outcome(log: str | os.PathLike[str], pour_start_s: float = 1.2) -> dict[str, Any]:
-    """The grasp's slip from a `franka_cup` probe log (`<out>/<scene>.grasp.jsonl`): a dict with
-    `reference_time_s`, `slip_time_s` (None: it held), `at` (the readouts then),
-    `load_over_capacity`, `max_held_ratio` and `final_drop_m`."""
+    """The grasp's break and slip from a `franka_cup` (or `franka_rigid_box`) probe log
+    (`<out>/<scene>.grasp.jsonl`), as `stark run` reports them: a dict with `reference_time_s`,
+    `break_time_s` and `at_break` (when static grasping broke: the cup slid faster than 1 mm/s
+    with the jaws' friction at μ·ΣN; None: it never did), `slip_time_s` (the 1 mm slip; None: it
+    held), `at` (the readouts at the slip, or at the end), `load_over_capacity`, `max_held_ratio`
+    and `final_drop_m`."""
 def classify_robot_towel(log: str | os.PathLike[str]) -> dict[str, Any]:
     """Classify a robot–towel run from its probe log (`<out>/<scene>.robot_towel.jsonl`): a dict
     with `outcome` ("P", "O" or "S"), `reason`, `robot_advance_m`, `towel_advance_m` and

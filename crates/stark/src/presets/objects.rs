@@ -9,8 +9,8 @@ use crate::deformables::{
 };
 use crate::error::{Result, StarkError};
 use crate::geometry::mesh;
-use crate::io::output::OutputCells;
 use crate::simulation::Simulation;
+use crate::state::OutputCells;
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 

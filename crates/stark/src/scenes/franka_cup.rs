@@ -138,8 +138,9 @@ impl Default for FrankaCupOptions {
     }
 }
 
-/// Duration of the built-in run, s: the grasp, the floor away and 30 balls.
-pub const DURATION_S: f64 = 8.0;
+/// Duration of the built-in run, s: the grasp, the floor away, 30 balls (the last at 7 s) and the
+/// cup left hanging as long again, as the original's 16 s.
+pub const DURATION_S: f64 = 16.0;
 
 /// Handles of a built scene.
 #[derive(Clone, Debug)]
