@@ -181,7 +181,8 @@ pub fn field_error(struct_name: &str, name: &str, fields: &[FieldDoc], kind_ok: 
 
 /// Defines a parameter struct and its [`ParamFields`] table. The doc comments are written once:
 /// they document the Rust struct and fields and are the table's doc text (the Python classes'
-/// docstrings and stubs). Fields are `f64` or `bool`.
+/// docstrings and stubs). Fields are `f64` or `bool`. The struct is made by
+/// [`documented_struct!`], so it is [`Documented`] too.
 macro_rules! param_struct {
     (
         $(#[doc = $doc:literal])*
@@ -191,11 +192,13 @@ macro_rules! param_struct {
             $( $(#[doc = $fdoc:literal])* pub $field:ident : $ty:ty ),* $(,)?
         }
     ) => {
-        $(#[doc = $doc])*
-        #[derive($($derive),*)]
-        $(#[serde($($serde)*)])?
-        pub struct $name {
-            $( $(#[doc = $fdoc])* pub $field: $ty, )*
+        $crate::params::documented_struct! {
+            $(#[doc = $doc])*
+            #[derive($($derive),*)]
+            $(#[serde($($serde)*)])?
+            pub struct $name {
+                $( $(#[doc = $fdoc])* pub $field: $ty, )*
+            }
         }
 
         impl $crate::params::ParamFields for $name {

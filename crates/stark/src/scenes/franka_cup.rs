@@ -742,9 +742,10 @@ impl SlipWatch {
 mod tests {
     use super::*;
 
-    /// A probe log of a held object that creeps (at `ε_v`), then slides at 3 mm/s from 2.0 s for
-    /// 0.1 s and then holds again: static grasping breaks at the slide, the 1 mm slip is never
-    /// reached.
+    /// A probe log of a held object that creeps (at `ε_v`), is jolted at 3 mm/s for 10 ms at 1.5 s
+    /// with the friction far from its limit (a ball landing), then slides at 3 mm/s from 2.0 s for
+    /// 0.1 s with the friction at μ·ΣN and then holds again: static grasping breaks at the slide,
+    /// not at the jolt, and the 1 mm slip is never reached.
     #[test]
     fn the_grasp_breaks_where_the_object_slides_not_where_it_creeps() {
         let dir = tempfile::tempdir().unwrap();
@@ -753,11 +754,14 @@ mod tests {
         let mut z = 0.05;
         for step in 0..500 {
             let t = 0.005 * (step + 1) as f64;
+            let sliding = (2.0..2.1).contains(&t);
             if t > 1.2 {
-                z -= 0.005 * if (2.0..2.1).contains(&t) { 3e-3 } else { 1e-4 };
+                let jolt = (1.5..1.51).contains(&t);
+                z -= 0.005 * if sliding || jolt { 3e-3 } else { 1e-4 };
             }
             let sample = GraspSample {
                 capacity_n: 2.5,
+                friction_on_held_n: if sliding { 2.5 } else { 1.0 },
                 load_n: 1.0 + t,
                 held_z_m: z,
                 jaw_z_m: 0.1,
