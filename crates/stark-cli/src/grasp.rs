@@ -1,5 +1,5 @@
-//! What `stark run` adds for the grasp scenes (`franka_cup`, `franka_rigid_box`): a picture of
-//! the state when the grasp slips, the outcome against the Coulomb threshold, and the plot of
+//! What `stark run` adds for the grasp scenes (`franka_cup`, `franka_rigid_box`): pictures of
+//! the state when static grasping breaks and when the grasp slips 1 mm, the outcome against the Coulomb threshold, and the plot of
 //! the load against the friction capacity.
 
 use crate::plot;
@@ -34,22 +34,15 @@ impl GraspRun {
         Some(GraspRun { watch, pour_start_s })
     }
 
-    /// After every step: draw the state when the grasp slips.
+    /// After every step: draw the state when static grasping breaks and when the grasp slips.
     pub fn after_step(&mut self, sim: &Simulation) {
-        match self.watch.update(sim) {
-            Some(franka_cup::GraspEvent::Slip) => {
-                let title = format!("{}: the grasp slips at t = {:.3} s", sim.settings.name, sim.time());
-                draw_state(sim, "slip", &title);
-            }
-            Some(franka_cup::GraspEvent::Break) => {
-                let title = format!(
-                    "{}: static grasping breaks at t = {:.3} s",
-                    sim.settings.name,
-                    sim.time()
-                );
-                draw_state(sim, "break", &title);
-            }
-            None => {}
+        for event in self.watch.update(sim) {
+            let (what, title) = match event {
+                franka_cup::GraspEvent::Slip => ("slip", "the grasp slips"),
+                franka_cup::GraspEvent::Break => ("break", "static grasping breaks"),
+            };
+            let title = format!("{}: {title} at t = {:.3} s", sim.settings.name, sim.time());
+            draw_state(sim, what, &title);
         }
     }
 

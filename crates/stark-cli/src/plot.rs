@@ -170,8 +170,8 @@ fn default_keys(lines: &[(f64, Value)]) -> Vec<String> {
     keys.into_iter().map(str::to_string).collect()
 }
 
-/// Draw `series`, one panel each (residuals on a log scale), into `png`.
-/// A moment marked on every panel of a plot: a vertical line at `time_s`, its label on the first.
+/// A moment marked on a plot: a vertical line at `time_s` on every panel with a linear scale, its
+/// label on the first panel (when that one is linear).
 pub struct Mark {
     /// Time, s.
     pub time_s: f64,
@@ -179,10 +179,12 @@ pub struct Mark {
     pub label: String,
 }
 
+/// Draw `series`, one panel each (residuals on a log scale), into `png`.
 fn draw(series: &[Series], title: &str, png: &Path) -> Result<()> {
     draw_marked(series, title, &[], png)
 }
 
+/// [`draw`] with moments marked.
 fn draw_marked(series: &[Series], title: &str, marks: &[Mark], png: &Path) -> Result<()> {
     register_font();
     if series.is_empty() {

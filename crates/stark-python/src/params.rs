@@ -669,16 +669,12 @@ where
         let wrapped = property.call1((
             descriptor.getattr("__get__")?,
             descriptor.getattr("__set__")?,
-            py_none(ty.py()),
+            ty.py().None(),
             f.doc_text(),
         ))?;
         ty.setattr(f.name, wrapped)?;
     }
     Ok(())
-}
-
-fn py_none(py: Python<'_>) -> Bound<'_, PyAny> {
-    py.None().into_bound(py)
 }
 
 /// Register the classes: settings, model parameters, materials (the lists of `param_list.rs`).

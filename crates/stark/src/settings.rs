@@ -297,7 +297,7 @@ mod tests {
     }
 
     /// Every field of the documented structs has a doc, and the table names the serialized
-    /// fields in order.
+    /// fields (the order is checked by the Python module when it registers the classes).
     fn table_matches<S: Documented + Default + Serialize>() {
         let json = serde_json::to_value(S::default()).unwrap();
         let keys: Vec<_> = json.as_object().unwrap().keys().cloned().collect();

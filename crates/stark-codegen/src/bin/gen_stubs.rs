@@ -66,9 +66,22 @@ fn python_type(rust_type: &str) -> (String, String) {
         "BarrierKind" => same(&literal(stark::contact::BarrierKind::VARIANTS)),
         "PairHessian" => same(&literal(stark::contact::PairHessian::VARIANTS)),
         // Nested settings and parameter structs: the Python class of the same name.
-        t if t.chars().all(|c| c.is_ascii_alphanumeric()) => same(t),
+        t if class_names().contains(&t) => same(t),
         t => panic!("no Python type for the Rust type `{t}`: add it to gen_stubs' python_type"),
     }
+}
+
+/// The Python names of the settings, parameter and material classes (`param_list.rs`).
+fn class_names() -> Vec<&'static str> {
+    macro_rules! names {
+        ($($name:ident => $rust:path),* $(,)?) => {
+            vec![$(stringify!($name)),*]
+        };
+    }
+    let mut all = param_list::settings_classes!(names);
+    all.extend(param_list::param_classes!(names));
+    all.extend(param_list::material_classes!(names));
+    all
 }
 
 /// The stubs of the methods a class has in Python only (written in stark-python/src/params.rs;

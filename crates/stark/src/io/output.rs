@@ -455,10 +455,9 @@ impl Simulation {
             let mut line = serde_json::Map::new();
             line.insert("step".into(), step.into());
             line.insert("time_s".into(), time_s.into());
-            let record = (p.record)(self);
-            line.insert(p.name.clone(), record.clone());
-            p.last = Some(record);
+            line.insert(p.name.clone(), (p.record)(self));
             result = write_line(&mut p.log, "probe log", &line);
+            p.last = line.remove(&p.name);
             // Flushed every step: scenes read their probes while running (outcomes, plots).
             if let (Ok(()), Some(log)) = (&result, &mut p.log) {
                 result = log.flush().map_err(|e| io_err(Path::new("probe log"), e));

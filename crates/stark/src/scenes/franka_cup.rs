@@ -201,7 +201,8 @@ fn bad(message: String) -> StarkError {
     StarkError::InvalidInput(message)
 }
 
-/// The issue's bending stiffness of the cup, N·m: about 1/50 of a real 0.3 mm PET sheet.
+/// The cup's bending stiffness of the model (issue 14's value; the paper does not give one), N·m:
+/// about 1/50 of a real 0.3 mm PET sheet ([`PET_BENDING_N_M`]).
 pub const CUP_BENDING_N_M: f64 = 1e-4;
 
 /// Bending stiffness of a real 0.3 mm PET sheet in the discrete-shell form, N·m: the plate's
@@ -209,10 +210,10 @@ pub const CUP_BENDING_N_M: f64 = 1e-4;
 /// `k θ² ‖ē‖/h̄` of a uniformly bent regular mesh is `D/2 ∫ κ²` for `k ≈ D/2`.
 pub const PET_BENDING_N_M: f64 = 4.7e-3;
 
-/// The cup's material (see the module docs) with a bending stiffness `bending` (N·m); `h` 0.3 mm.
-pub fn cup_material(bending: f64) -> SurfaceMaterial {
+/// The cup's material (see the module docs) with a bending stiffness `bending_n_m` (N·m); `h` 0.3 mm.
+pub fn cup_material(bending_n_m: f64) -> SurfaceMaterial {
     let thickness_m = 3e-4;
-    let membrane_n_m = 1e6;
+    let membrane_stiffness_n_per_m = 1e6;
     // A light Rayleigh damping (β = 1 ms) takes out the membrane's ringing without slowing the
     // cup's motion.
     let beta_s = 1e-3;
@@ -224,14 +225,14 @@ pub fn cup_material(bending: f64) -> SurfaceMaterial {
         },
         strain: crate::deformables::TriangleStrainParams {
             thickness_m,
-            youngs_modulus: membrane_n_m / thickness_m,
+            youngs_modulus: membrane_stiffness_n_per_m / thickness_m,
             poissons_ratio: 0.45,
-            damping: beta_s * membrane_n_m,
+            damping: beta_s * membrane_stiffness_n_per_m,
             ..Default::default()
         },
         bending: crate::presets::Bending::Dihedral(crate::deformables::DihedralBendingParams {
-            stiffness: bending,
-            damping: beta_s * bending,
+            stiffness: bending_n_m,
+            damping: beta_s * bending_n_m,
         }),
         contact_thickness_m: Some(DHAT_M / 2.0),
     }
@@ -256,6 +257,12 @@ pub const BALL_DROP_M: f64 = 2e-3;
 
 /// Build the scene with `options` (see the module docs).
 pub fn build(mut settings: Settings, options: FrankaCupOptions) -> Result<(Simulation, FrankaCup)> {
+    if !(options.cup_bending_n_m >= 0.0 && options.cup_bending_n_m.is_finite()) {
+        return Err(bad(format!(
+            "cup_bending_n_m = {} must be non-negative",
+            options.cup_bending_n_m
+        )));
+    }
     settings.contact.default_thickness_m = Some(DHAT_M / 2.0);
     // A stiff membrane on light nodes: CG converges slowly where the factorisation is cheap.
     settings.newton.linear_solver = crate::solver::LinearSolver::Cholesky;
@@ -381,12 +388,6 @@ pub fn build(mut settings: Settings, options: FrankaCupOptions) -> Result<(Simul
         .ok_or_else(|| bad("the hand has no fr3_finger_joint1".into()))?;
 
     // ---- Friction ----
-    if !(options.cup_bending_n_m >= 0.0 && options.cup_bending_n_m.is_finite()) {
-        return Err(bad(format!(
-            "cup_bending_n_m = {} must be non-negative",
-            options.cup_bending_n_m
-        )));
-    }
     if !(options.mu_jaw >= 0.0 && options.mu_jaw.is_finite()) {
         return Err(bad(format!("mu_jaw = {} must be non-negative", options.mu_jaw)));
     }
@@ -566,8 +567,34 @@ fn at_friction_limit(s: &GraspSample) -> bool {
     s.capacity_n > 0.0 && s.friction_on_held_n >= BREAK_FRICTION_FRACTION * s.capacity_n
 }
 
-/// Read a probe log and find the slip (see [`GraspOutcome`]); `pour_start_s` from the options.
-pub fn grasp_outcome(log: &Path, pour_start_s: f64) -> Result<GraspOutcome> {
+/// Finds where static grasping breaks, from the probe's samples in time order: the held object
+/// slides down relative to the jaws faster than [`BREAK_SPEED_M_S`] over the last
+/// [`BREAK_WINDOW_S`] while the jaws' friction is at its limit. [`grasp_outcome`] and
+/// [`SlipWatch`] both use it.
+#[derive(Clone, Debug, Default)]
+pub struct BreakDetector {
+    /// (time, height of the held object relative to the jaws), s and m: the samples of the last
+    /// window and the one before it.
+    recent: std::collections::VecDeque<(f64, f64)>,
+}
+
+impl BreakDetector {
+    /// Add the sample at `time_s`; true if the object slides with the friction at its limit.
+    pub fn push(&mut self, time_s: f64, sample: &GraspSample) -> bool {
+        let rel = sample.held_z_m - sample.jaw_z_m;
+        self.recent.push_back((time_s, rel));
+        // Keep the latest sample at least a window old as the front.
+        while self.recent.len() > 1 && self.recent[1].0 <= time_s - BREAK_WINDOW_S + 1e-9 {
+            self.recent.pop_front();
+        }
+        let (t0, rel0) = self.recent[0];
+        let window_s = time_s - t0;
+        window_s >= BREAK_WINDOW_S - 1e-9 && (rel0 - rel) / window_s > BREAK_SPEED_M_S && at_friction_limit(sample)
+    }
+}
+
+/// Read a probe log (`<scene>.grasp.jsonl`) into (time, sample) pairs.
+fn read_probe_log(log: &Path) -> Result<Vec<ProbeLine>> {
     let text =
         std::fs::read_to_string(log).map_err(|e| bad(format!("cannot read the grasp log {}: {e}", log.display())))?;
     let mut lines = Vec::new();
@@ -576,6 +603,12 @@ pub fn grasp_outcome(log: &Path, pour_start_s: f64) -> Result<GraspOutcome> {
             .map_err(|e| bad(format!("{}:{}: not a grasp probe line: {e}", log.display(), i + 1)))?;
         lines.push(line);
     }
+    Ok(lines)
+}
+
+/// Read a probe log and find the slip (see [`GraspOutcome`]); `pour_start_s` from the options.
+pub fn grasp_outcome(log: &Path, pour_start_s: f64) -> Result<GraspOutcome> {
+    let lines = read_probe_log(log)?;
     let reference = lines.iter().rev().find(|l| l.time_s < pour_start_s).ok_or_else(|| {
         bad(format!(
             "{}: no step before the pour at {pour_start_s} s",
@@ -587,23 +620,10 @@ pub fn grasp_outcome(log: &Path, pour_start_s: f64) -> Result<GraspOutcome> {
     let slip = lines
         .iter()
         .find(|l| l.time_s > reference.time_s && rel0 - rel(&l.grasp) > SLIP_M);
-    // The sliding speed over the window ending at each line (`j` trails `i`).
-    let mut broken = None;
-    let mut j = 0;
-    for (i, l) in lines.iter().enumerate() {
-        while j < i && lines[j + 1].time_s <= l.time_s - BREAK_WINDOW_S + 1e-9 {
-            j += 1;
-        }
-        let window_s = l.time_s - lines[j].time_s;
-        if l.time_s > reference.time_s
-            && window_s > 0.5 * BREAK_WINDOW_S
-            && (rel(&lines[j].grasp) - rel(&l.grasp)) / window_s > BREAK_SPEED_M_S
-            && at_friction_limit(&l.grasp)
-        {
-            broken = Some(&lines[i]);
-            break;
-        }
-    }
+    let mut detector = BreakDetector::default();
+    let broken = lines
+        .iter()
+        .find(|l| detector.push(l.time_s, &l.grasp) && l.time_s > reference.time_s);
     let last = lines.last().expect("the reference is a line");
     let at = slip.unwrap_or(last);
     let ratio = |s: &GraspSample| {
@@ -631,8 +651,8 @@ pub fn grasp_outcome(log: &Path, pour_start_s: f64) -> Result<GraspOutcome> {
     })
 }
 
-/// Watches a run of this scene for the slip while it runs (to act on it: `stark run` draws the
-/// state), with the same criterion as [`grasp_outcome`].
+/// Watches a run of this scene for the break and the slip while it runs (to act on them: `stark
+/// run` draws the state), with the criteria of [`grasp_outcome`].
 #[derive(Clone, Debug)]
 pub struct SlipWatch {
     pour_start_s: f64,
@@ -642,14 +662,14 @@ pub struct SlipWatch {
     reference_m: Option<f64>,
     slipped: bool,
     broke: bool,
-    /// The relative heights over the last [`BREAK_WINDOW_S`]: (time, height), s and m.
-    recent: std::collections::VecDeque<(f64, f64)>,
+    breaks: BreakDetector,
 }
 
 /// What [`SlipWatch::update`] saw at a step.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum GraspEvent {
-    /// Static grasping broke: the held object first slid faster than [`BREAK_SPEED_M_S`].
+    /// Static grasping broke: the held object first slid faster than [`BREAK_SPEED_M_S`] with
+    /// the jaws' friction at its limit.
     Break,
     /// The held object first reached [`SLIP_M`] below its height before the pour.
     Slip,
@@ -673,12 +693,13 @@ impl SlipWatch {
             reference_m: None,
             slipped: false,
             broke: false,
-            recent: Default::default(),
+            breaks: BreakDetector::default(),
         })
     }
 
-    /// Continue a resumed run: the reference and whether it slipped already, from its probe log
-    /// (nothing to do when the log has no step of the pour yet).
+    /// Continue a resumed run from its probe log: the reference, whether it broke and slipped
+    /// already, and the break detector's window (nothing to do when the log has no step of the
+    /// pour yet).
     pub fn resume_from_log(&mut self, log: &Path) -> Result<()> {
         // Before the pour the reference is taken again by `update` at every step anyway.
         if log.exists() {
@@ -686,6 +707,9 @@ impl SlipWatch {
                 self.reference_m = Some(outcome.reference_height_m);
                 self.slipped = outcome.slip_time_s.is_some();
                 self.broke = outcome.break_time_s.is_some();
+            }
+            for l in read_probe_log(log).unwrap_or_default() {
+                self.breaks.push(l.time_s, &l.grasp);
             }
         }
         Ok(())
@@ -703,38 +727,32 @@ impl SlipWatch {
         held - jaw
     }
 
-    /// Call after every step: the event of this step, if any ([`GraspEvent::Slip`] wins when
-    /// both come at once; each comes once). The break needs the step's probe record (the jaws'
-    /// friction), so step logs must be on.
-    pub fn update(&mut self, sim: &Simulation) -> Option<GraspEvent> {
-        let rel = self.relative_height(sim);
+    /// Call after every step: the events of this step (each comes once; both may come at the
+    /// same step). The break needs the step's probe record (the jaws' friction), so step logs
+    /// must be on for it.
+    pub fn update(&mut self, sim: &Simulation) -> Vec<GraspEvent> {
         let t = sim.time();
-        self.recent.push_back((t, rel));
-        while self.recent.len() > 1 && self.recent[1].0 <= t - BREAK_WINDOW_S + 1e-9 {
-            self.recent.pop_front();
-        }
+        let mut events = Vec::new();
+        let sample = sim
+            .last_probe_record(PROBE)
+            .and_then(|r| serde_json::from_value::<GraspSample>(r.clone()).ok());
+        let slides = sample.is_some_and(|s| self.breaks.push(t, &s));
+        let rel = self.relative_height(sim);
         if t < self.pour_start_s {
             self.reference_m = Some(rel);
-            return None;
+            return events;
         }
-        let reference = self.reference_m?;
-        if !self.slipped && reference - rel > SLIP_M {
-            self.slipped = true;
+        if !self.broke && slides {
             self.broke = true;
-            return Some(GraspEvent::Slip);
+            events.push(GraspEvent::Break);
         }
-        let (t0, rel0) = self.recent[0];
-        let window_s = t - t0;
-        let at_limit = || {
-            sim.last_probe_record(PROBE)
-                .and_then(|r| serde_json::from_value::<GraspSample>(r.clone()).ok())
-                .is_some_and(|s| at_friction_limit(&s))
-        };
-        if !self.broke && window_s > 0.5 * BREAK_WINDOW_S && (rel0 - rel) / window_s > BREAK_SPEED_M_S && at_limit() {
-            self.broke = true;
-            return Some(GraspEvent::Break);
+        if let Some(reference) = self.reference_m {
+            if !self.slipped && reference - rel > SLIP_M {
+                self.slipped = true;
+                events.push(GraspEvent::Slip);
+            }
         }
-        None
+        events
     }
 }
 

@@ -218,13 +218,13 @@ fn builtin_scenes_without_suites() -> Vec<BuiltinScene> {
             name: "franka_cup_pet",
             description: "franka_cup with the bending stiffness of a real 0.3 mm PET sheet (4.7e-3 N·m instead of 1e-4): the tapered wall as a wedge, without the pads' indentation",
             duration_s: franka_cup::DURATION_S,
-            build: |s| franka_cup_variant(s, "franka_cup_pet", franka_cup::PET_BENDING_N_M, false),
+            build: |s| franka_cup_variant(s, "franka_cup_pet", franka_cup::PET_BENDING_N_M, Default::default()),
         },
         BuiltinScene {
             name: "franka_cup_straight",
             description: "franka_cup with a straight wall (radius 27 mm top and bottom): the pads' indentation without the wedge",
             duration_s: franka_cup::DURATION_S,
-            build: |s| franka_cup_variant(s, "franka_cup_straight", franka_cup::CUP_BENDING_N_M, true),
+            build: |s| franka_cup_variant(s, "franka_cup_straight", franka_cup::CUP_BENDING_N_M, straight_cup()),
         },
         BuiltinScene {
             name: "franka_rigid_box",
@@ -242,29 +242,35 @@ fn builtin_scenes_without_suites() -> Vec<BuiltinScene> {
 }
 
 /// The built-in `franka_cup` (see [`franka_cup`]).
-pub fn franka_cup_scene(mut settings: Settings) -> Result<Simulation> {
-    settings.name = "franka_cup".into();
-    settings.time_step_s = 0.005;
-    settings.newton.residual_tolerance_n = 1e-6;
-    Ok(franka_cup::build(settings, franka_cup::FrankaCupOptions::default())?.0)
+pub fn franka_cup_scene(settings: Settings) -> Result<Simulation> {
+    let shape = crate::presets::meshes::CupShape::default();
+    franka_cup_variant(settings, "franka_cup", franka_cup::CUP_BENDING_N_M, shape)
 }
 
-/// The variants of [`franka_cup`] that separate the wedge of the tapered wall from the pads'
-/// indentation of a soft one: another bending stiffness (N·m), a straight wall.
-pub fn franka_cup_variant(mut settings: Settings, name: &str, bending_n_m: f64, straight: bool) -> Result<Simulation> {
+/// [`franka_cup`] with another cup: bending stiffness (N·m) and shape. The variants separate the
+/// wedge of the tapered wall from the pads' indentation of a soft one.
+pub fn franka_cup_variant(
+    mut settings: Settings,
+    name: &str,
+    bending_n_m: f64,
+    shape: crate::presets::meshes::CupShape,
+) -> Result<Simulation> {
     settings.name = name.into();
     settings.time_step_s = 0.005;
     settings.newton.residual_tolerance_n = 1e-6;
-    let mut shape = crate::presets::meshes::CupShape::default();
-    if straight {
-        shape.bottom_radius_m = shape.rim_radius_m;
-    }
     let options = franka_cup::FrankaCupOptions {
         held: franka_cup::Held::Cup(shape),
         cup_bending_n_m: bending_n_m,
         ..Default::default()
     };
     Ok(franka_cup::build(settings, options)?.0)
+}
+
+/// A cup with a straight wall: the default's rim radius top and bottom.
+fn straight_cup() -> crate::presets::meshes::CupShape {
+    let mut shape = crate::presets::meshes::CupShape::default();
+    shape.bottom_radius_m = shape.rim_radius_m;
+    shape
 }
 
 /// The built-in `franka_rigid_box`: [`franka_cup`] with a rigid box pulled down instead of the cup.
