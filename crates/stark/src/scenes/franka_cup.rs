@@ -608,7 +608,11 @@ fn read_probe_log(log: &Path) -> Result<Vec<ProbeLine>> {
 
 /// Read a probe log and find the slip (see [`GraspOutcome`]); `pour_start_s` from the options.
 pub fn grasp_outcome(log: &Path, pour_start_s: f64) -> Result<GraspOutcome> {
-    let lines = read_probe_log(log)?;
+    outcome_of_lines(&read_probe_log(log)?, log, pour_start_s)
+}
+
+/// [`grasp_outcome`] of the lines read from `log`.
+fn outcome_of_lines(lines: &[ProbeLine], log: &Path, pour_start_s: f64) -> Result<GraspOutcome> {
     let reference = lines.iter().rev().find(|l| l.time_s < pour_start_s).ok_or_else(|| {
         bad(format!(
             "{}: no step before the pour at {pour_start_s} s",
@@ -703,12 +707,13 @@ impl SlipWatch {
     pub fn resume_from_log(&mut self, log: &Path) -> Result<()> {
         // Before the pour the reference is taken again by `update` at every step anyway.
         if log.exists() {
-            if let Ok(outcome) = grasp_outcome(log, self.pour_start_s) {
+            let lines = read_probe_log(log)?;
+            if let Ok(outcome) = outcome_of_lines(&lines, log, self.pour_start_s) {
                 self.reference_m = Some(outcome.reference_height_m);
                 self.slipped = outcome.slip_time_s.is_some();
                 self.broke = outcome.break_time_s.is_some();
             }
-            for l in read_probe_log(log).unwrap_or_default() {
+            for l in &lines {
                 self.breaks.push(l.time_s, &l.grasp);
             }
         }
@@ -735,7 +740,7 @@ impl SlipWatch {
         let mut events = Vec::new();
         let sample = sim
             .last_probe_record(PROBE)
-            .and_then(|r| serde_json::from_value::<GraspSample>(r.clone()).ok());
+            .and_then(|r| GraspSample::deserialize(r).ok());
         let slides = sample.is_some_and(|s| self.breaks.push(t, &s));
         let rel = self.relative_height(sim);
         if t < self.pour_start_s {
