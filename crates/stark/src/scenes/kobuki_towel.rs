@@ -17,7 +17,7 @@ use super::robot_towel_outcome::Sample;
 use crate::contact::ContactHandle;
 use crate::deformables::NodeSetHandle;
 use crate::error::{Result, StarkError};
-use crate::presets::{meshes, SurfaceMaterial};
+use crate::presets::{meshes, ObstacleHandle, SurfaceMaterial};
 use crate::rigidbodies::joints::JointHandle;
 use crate::rigidbodies::{RigidBodyHandle, Shape};
 use crate::robots::urdf::{Actuator, JointOverride, LinkOverride, Robot, RobotOptions};
@@ -198,7 +198,9 @@ pub const DURATION_S: f64 = 6.0;
 pub const DHAT_M: f64 = 3.25e-3;
 /// The towel's offset from the robot's centre along the driving direction, m.
 const TOWEL_OFFSET_Y_M: f64 = 0.5;
-/// Height of the body centre above the floor at rest (casters on the floor), m.
+/// Height of the body centre above the floor at rest (casters on the floor), m. Contact keeps
+/// the floor's and the robot's surfaces d̂ apart (their two contact thicknesses), as it keeps the
+/// towel d̂ above the floor: heights are measured from there, d̂ above the floor's mesh.
 const BODY_HEIGHT_M: f64 = 0.057;
 /// The robot starts this far above its resting height, m.
 const DROP_M: f64 = 0.005;
@@ -208,12 +210,36 @@ pub const MOTOR_TARGET_RAD_S: f64 = 7.43;
 pub const MOTOR_MAX_TORQUE_N_M: f64 = 0.0666;
 /// Rate error over which the motor torque rises smoothly to its cap, rad/s.
 pub const MOTOR_TRANSITION_RAD_S: f64 = 1.0;
-/// Suspension spring: stiffness N/m, rest length m (body centre to axle), damping N·s/m (in
-/// the URDF).
+/// Suspension spring stiffness, N/m (its damping, 2 N·s/m, is in the URDF).
 const SUSPENSION_STIFFNESS_N_M: f64 = 1.6e3;
-const SUSPENSION_REST_LENGTH_M: f64 = 0.035;
-/// Body centre to axle at the URDF's zero of the suspension sliders, m.
-const SUSPENSION_ZERO_LENGTH_M: f64 = 0.022;
+/// Mass of the body in the URDF (the `original` set), kg.
+const BODY_MASS_KG: f64 = 2.951;
+/// Mass of each caster, arm and wheel, kg.
+const PART_MASS_KG: f64 = 0.1;
+
+/// The suspension springs' preload: the slider coordinate at which a spring is free (the
+/// URDF's zero is the resting pose, axle 0.022 m below the body centre), m.
+///
+/// The issue gives the spring (rest length 0.035 m, 1.6e3 N/m) and the resting pose (body centre
+/// 0.057 m above the floor, casters on it) but not the spring's anchors. With the centre of mass
+/// over the axles the two springs carry the whole sprung weight (body and casters) at rest, so
+/// each is compressed by `W/2k` there (9.7 mm for `original`: with the rest length 0.035 m, the
+/// spring's anchor on the body sits 3.3 mm above the body centre). Reading the rest length from the
+/// body centre to the axle instead preloads each spring by 20.8 N at the resting pose, 5 N more
+/// than its share: the body rode 4.8 mm high on its drive wheels and rear caster, with 2 cm of
+/// clearance under the collision mesh where the paper states 1.35 cm (1.5 cm at 0.057 m).
+fn suspension_free_coordinate_m(params: ParamSet, gravity_m_s2: f64) -> f64 {
+    let sprung_kg = body_mass_kg(params) + 2.0 * PART_MASS_KG;
+    -sprung_kg * gravity_m_s2 / (2.0 * SUSPENSION_STIFFNESS_N_M)
+}
+
+/// Mass of the robot's body, kg: `original` 2.951 kg (3.551 kg in all), `paper` 2.951 kg in all.
+fn body_mass_kg(params: ParamSet) -> f64 {
+    match params {
+        ParamSet::Original => BODY_MASS_KG,
+        ParamSet::Paper => BODY_MASS_KG - 6.0 * PART_MASS_KG,
+    }
+}
 
 /// The robot and towel of a built run, for sampling.
 pub struct RobotTowel {
@@ -235,6 +261,8 @@ pub struct RobotTowel {
     pub motors: [JointHandle; 2],
     /// The suspension sliders (left, right).
     pub suspensions: [JointHandle; 2],
+    /// The sliders' coordinate at which the springs are free, m.
+    pub suspension_free_m: f64,
 }
 
 /// Per-step record of a run (a line of the probe log `<scene>.robot_towel.jsonl`).
@@ -246,7 +274,7 @@ pub struct Record {
     pub motor_torque_n_m: [f64; 2],
     /// Wheel rates relative to their arms (left, right), rad/s; positive forward.
     pub wheel_speed_rad_s: [f64; 2],
-    /// Suspension compression (left, right): rest length minus length, m.
+    /// Suspension compression (left, right): the spring's free length minus its length, m.
     pub suspension_compression_m: [f64; 2],
     /// Robot body centre, m.
     pub robot_position_m: [f64; 3],
@@ -296,10 +324,9 @@ impl RobotTowel {
             },
             motor_torque_n_m: torque,
             wheel_speed_rad_s: motor.map(|m| m.coordinate_rate.unwrap_or(0.0)),
-            // The slider coordinate is the arm's rise from the URDF zero (0.022 m below the
-            // body centre): length = 0.022 − q.
-            suspension_compression_m: suspension
-                .map(|s| SUSPENSION_REST_LENGTH_M - (SUSPENSION_ZERO_LENGTH_M - s.coordinate.unwrap_or(0.0))),
+            // The slider coordinate is the arm's rise from the resting pose; the spring is
+            // free at `suspension_free_m`.
+            suspension_compression_m: suspension.map(|s| s.coordinate.unwrap_or(0.0) - self.suspension_free_m),
             robot_position_m: p.into(),
             robot_yaw_deg: (-forward.x).atan2(forward.y).to_degrees(),
             robot_pitch_deg: forward.z.atan2(forward.xy().norm()).to_degrees(),
@@ -417,67 +444,9 @@ pub fn build_with_towel(
     }
     let towel_contact = towel.contact.expect("the towel has a contact thickness");
 
-    // ---- Floor: a fixed slab under the towel and the robot's path ----
-    let floor_size = Vector3::new(2.0, 3.0, 0.05);
-    let mut floor = meshes::box_mesh(floor_size);
-    for v in &mut floor.vertices {
-        *v += Vector3::new(0.0, 1.0, floor_top - floor_size.z / 2.0);
-    }
-    let floor = sim.add_prescribed_surface("floor", &floor.vertices, &floor.elements, thickness, 1e6)?;
-
-    // ---- Robot ----
-    let body_mesh = parse(KOBUKI_COLLISION_OBJ, "kobuki_collision.obj")?;
-    let mut options = RobotOptions {
-        position_m: Vector3::new(0.0, 0.0, floor_top + BODY_HEIGHT_M + DROP_M),
-        // No contact inside the robot (body, arms, wheels, casters).
-        self_collision: false,
-        contact_thickness_m: Some(thickness),
-        ..Default::default()
-    };
-    options.links.insert(
-        "base_link".into(),
-        LinkOverride {
-            collision_shape: Some(Shape::Mesh {
-                vertices_m: body_mesh.vertices,
-                triangles: body_mesh.elements,
-                scale: Vector3::repeat(1.0),
-            }),
-            mass_kg: match case.params {
-                ParamSet::Original => None,
-                ParamSet::Paper => Some(2.951 - 6.0 * 0.1),
-            },
-            ..Default::default()
-        },
-    );
-    for side in ["left", "right"] {
-        options.joints.insert(
-            format!("suspension_{side}_joint"),
-            JointOverride {
-                actuator: Some(Actuator::SpringDamper {
-                    stiffness: SUSPENSION_STIFFNESS_N_M,
-                    // Rest length 0.035 m from the body centre to the axle: the arm 0.013 m below
-                    // the URDF zero.
-                    rest: SUSPENSION_ZERO_LENGTH_M - SUSPENSION_REST_LENGTH_M,
-                    damping: 0.0,
-                }),
-                ..Default::default()
-            },
-        );
-        options.joints.insert(
-            format!("wheel_{side}_joint"),
-            JointOverride {
-                actuator: Some(Actuator::Motor {
-                    target_rad_s: MOTOR_TARGET_RAD_S,
-                    max_torque_n_m: Some(MOTOR_MAX_TORQUE_N_M),
-                    delay_rad_s: Some(MOTOR_TRANSITION_RAD_S),
-                    // Driving only: the motors never brake the wheels.
-                    drive_only: true,
-                }),
-                ..Default::default()
-            },
-        );
-    }
-    let robot = sim.add_robot_from_str("kobuki", KOBUKI_URDF, "kobuki_paper.urdf", Path::new("."), &options)?;
+    let floor = add_floor(&mut sim, floor_top, thickness)?;
+    let robot = add_kobuki(&mut sim, case.params, floor_top + DHAT_M, thickness)?;
+    let suspension_free_m = suspension_free_coordinate_m(case.params, gravity(&sim));
     let body = robot.body("base_link").expect("the URDF has base_link");
     let mesh_of = |link: &str| {
         let b = robot.body(link).expect("link of the URDF");
@@ -510,9 +479,79 @@ pub fn build_with_towel(
         wheel_contacts: wheels.map(|w| w.contact),
         motors: [joint("wheel_left_joint"), joint("wheel_right_joint")],
         suspensions: [joint("suspension_left_joint"), joint("suspension_right_joint")],
+        suspension_free_m,
         robot,
     };
     Ok((sim, handles))
+}
+
+/// The floor: a fixed slab with its top at `top_z_m`, under the towel and the robot's path.
+fn add_floor(sim: &mut Simulation, top_z_m: f64, thickness_m: f64) -> Result<ObstacleHandle> {
+    let floor_size = Vector3::new(2.0, 3.0, 0.05);
+    let mut floor = meshes::box_mesh(floor_size);
+    for v in &mut floor.vertices {
+        *v += Vector3::new(0.0, 1.0, top_z_m - floor_size.z / 2.0);
+    }
+    sim.add_prescribed_surface("floor", &floor.vertices, &floor.elements, thickness_m, 1e6)
+}
+
+/// Gravity's magnitude, m/s².
+fn gravity(sim: &Simulation) -> f64 {
+    Vector3::from(sim.settings.gravity_m_s2).norm()
+}
+
+/// The robot, facing +y, its body centre [`BODY_HEIGHT_M`] + [`DROP_M`] above `support_z_m`
+/// (where contact holds its wheels: d̂ above the floor's mesh), with the fitted body mesh, the
+/// suspension springs and the drive motors.
+fn add_kobuki(sim: &mut Simulation, params: ParamSet, support_z_m: f64, thickness: f64) -> Result<Robot> {
+    let body_mesh = parse(KOBUKI_COLLISION_OBJ, "kobuki_collision.obj")?;
+    let suspension_free_m = suspension_free_coordinate_m(params, gravity(sim));
+    let mut options = RobotOptions {
+        position_m: Vector3::new(0.0, 0.0, support_z_m + BODY_HEIGHT_M + DROP_M),
+        // No contact inside the robot (body, arms, wheels, casters).
+        self_collision: false,
+        contact_thickness_m: Some(thickness),
+        ..Default::default()
+    };
+    options.links.insert(
+        "base_link".into(),
+        LinkOverride {
+            collision_shape: Some(Shape::Mesh {
+                vertices_m: body_mesh.vertices,
+                triangles: body_mesh.elements,
+                scale: Vector3::repeat(1.0),
+            }),
+            mass_kg: Some(body_mass_kg(params)),
+            ..Default::default()
+        },
+    );
+    for side in ["left", "right"] {
+        options.joints.insert(
+            format!("suspension_{side}_joint"),
+            JointOverride {
+                actuator: Some(Actuator::SpringDamper {
+                    stiffness: SUSPENSION_STIFFNESS_N_M,
+                    rest: suspension_free_m,
+                    damping: 0.0,
+                }),
+                ..Default::default()
+            },
+        );
+        options.joints.insert(
+            format!("wheel_{side}_joint"),
+            JointOverride {
+                actuator: Some(Actuator::Motor {
+                    target_rad_s: MOTOR_TARGET_RAD_S,
+                    max_torque_n_m: Some(MOTOR_MAX_TORQUE_N_M),
+                    delay_rad_s: Some(MOTOR_TRANSITION_RAD_S),
+                    // Driving only: the motors never brake the wheels.
+                    drive_only: true,
+                }),
+                ..Default::default()
+            },
+        );
+    }
+    sim.add_robot_from_str("kobuki", KOBUKI_URDF, "kobuki_paper.urdf", Path::new("."), &options)
 }
 
 /// Name of the probe log a built-in run writes: `<scene>.robot_towel.jsonl`.
@@ -577,16 +616,59 @@ mod tests {
                 };
                 let (sim, run) = build(quiet(), case).unwrap();
                 let r = run.record(&sim);
-                // Body centre 57 mm + 5 mm above the floor, which is d̂ under the towel.
+                // Body centre 57 mm + 5 mm above where the towel lies (the floor's mesh + d̂).
                 let towel = sim.positions(run.towel);
                 let z_min = towel.iter().map(|p| p.z).fold(f64::INFINITY, f64::min);
-                let height = r.robot_position_m[2] - (z_min - DHAT_M);
+                let height = r.robot_position_m[2] - z_min;
                 assert!((height - 0.062).abs() < 1e-12, "{height}");
                 // The towel starts ahead of the robot's front.
                 let near = towel.iter().map(|p| p.y).fold(f64::INFINITY, f64::min);
                 assert!(near > 0.18 + 0.3, "{}: near edge {near}", case.name());
                 assert_eq!(towel.len(), 5757);
             }
+        }
+    }
+
+    /// The robot alone on the floor, driving: its body settles 57 mm above the floor (casters
+    /// on it, level), the springs carrying the sprung weight with the casters, and its
+    /// collision mesh about 1.5 cm above the floor (the paper: a clearance of 1.35 cm).
+    #[test]
+    fn the_robot_rests_at_its_stated_height() {
+        for params in [ParamSet::Original, ParamSet::Paper] {
+            let mut settings = quiet();
+            settings.time_step_s = 0.005;
+            settings.newton.residual_tolerance_n = 1e-6;
+            let thickness = DHAT_M / 2.0;
+            settings.contact.default_thickness_m = Some(thickness);
+            let mut sim = Simulation::new(settings).unwrap();
+            let floor = add_floor(&mut sim, 0.0, thickness).unwrap();
+            let robot = add_kobuki(&mut sim, params, DHAT_M, thickness).unwrap();
+            for m in &robot.collision_meshes {
+                sim.contact.set_friction(m.contact, floor.contact, 1.0).unwrap();
+            }
+            let body = robot.body("base_link").unwrap();
+            let springs = ["suspension_left_joint", "suspension_right_joint"].map(|j| robot.joint(j).cloned().unwrap());
+            sim.run(0.5).unwrap();
+            let z_m = sim.body_position(body).z - DHAT_M;
+            // The barrier holds the wheels a fraction of a millimetre inside d̂.
+            assert!((z_m - BODY_HEIGHT_M).abs() < 1e-3, "{params:?}: body centre at {z_m} m");
+            let forward = sim.body_orientation(body) * Vector3::y();
+            assert!(forward.z.abs() < 0.1f64.to_radians(), "{params:?}: pitch {}", forward.z);
+            let free_m = suspension_free_coordinate_m(params, 9.81);
+            let spring_force_n: f64 = springs
+                .iter()
+                .map(|j| SUSPENSION_STIFFNESS_N_M * (sim.joint_state(j).coordinate.unwrap() - free_m))
+                .sum();
+            let sprung_weight_n = (body_mass_kg(params) + 2.0 * PART_MASS_KG) * 9.81;
+            assert!(
+                spring_force_n > 0.8 * sprung_weight_n && spring_force_n <= sprung_weight_n,
+                "{params:?}: springs {spring_force_n} N of {sprung_weight_n} N"
+            );
+            let mesh_bottom_m = z_m - 0.0419;
+            assert!(
+                (mesh_bottom_m - 0.0151).abs() < 1e-3,
+                "{params:?}: clearance {mesh_bottom_m}"
+            );
         }
     }
 

