@@ -223,11 +223,12 @@ const PART_MASS_KG: f64 = 0.1;
 /// The issue gives the spring (rest length 0.035 m, 1.6e3 N/m) and the resting pose (body centre
 /// 0.057 m above the floor, casters on it) but not the spring's anchors. With the centre of mass
 /// over the axles the two springs carry the whole sprung weight (body and casters) at rest, so
-/// each is compressed by `W/2k` there (9.7 mm for `original`: with the rest length 0.035 m, the
-/// spring's anchor on the body sits 3.3 mm above the body centre). Reading the rest length from the
-/// body centre to the axle instead preloads each spring by 20.8 N at the resting pose, 5 N more
-/// than its share: the body rode 4.8 mm high on its drive wheels and rear caster, with 2 cm of
-/// clearance under the collision mesh where the paper states 1.35 cm (1.5 cm at 0.057 m).
+/// each is compressed by `W/2k` there (9.7 mm for `original`: with the rest length 0.035 m,
+/// the spring's anchor on the body sits 3.3 mm above the body centre). Reading the rest length
+/// from the body centre to the axle instead preloads each spring by 20.8 N at the resting pose,
+/// 5 N more than its share: the body rode 2.2 mm high on its drive wheels and rear caster,
+/// pitched 0.6–0.9° nose-up, the front of its collision mesh 1.9 cm above the floor where the
+/// paper states a clearance of 1.35 cm (1.5 cm at 0.057 m).
 fn suspension_free_coordinate_m(params: ParamSet, gravity_m_s2: f64) -> f64 {
     let sprung_kg = body_mass_kg(params) + 2.0 * PART_MASS_KG;
     -sprung_kg * gravity_m_s2 / (2.0 * SUSPENSION_STIFFNESS_N_M)
