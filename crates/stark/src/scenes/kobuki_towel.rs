@@ -446,8 +446,7 @@ pub fn build_with_towel(
     let towel_contact = towel.contact.expect("the towel has a contact thickness");
 
     let floor = add_floor(&mut sim, floor_top, thickness)?;
-    let robot = add_kobuki(&mut sim, case.params, floor_top + DHAT_M, thickness)?;
-    let suspension_free_m = suspension_free_coordinate_m(case.params, gravity(&sim));
+    let (robot, suspension_free_m) = add_kobuki(&mut sim, case.params, floor_top + DHAT_M, thickness)?;
     let body = robot.body("base_link").expect("the URDF has base_link");
     let mesh_of = |link: &str| {
         let b = robot.body(link).expect("link of the URDF");
@@ -503,8 +502,9 @@ fn gravity(sim: &Simulation) -> f64 {
 
 /// The robot, facing +y, its body centre [`BODY_HEIGHT_M`] + [`DROP_M`] above `support_z_m`
 /// (where contact holds its wheels: d̂ above the floor's mesh), with the fitted body mesh, the
-/// suspension springs and the drive motors.
-fn add_kobuki(sim: &mut Simulation, params: ParamSet, support_z_m: f64, thickness: f64) -> Result<Robot> {
+/// suspension springs and the drive motors; with the sliders' coordinate at which the springs
+/// are free, m.
+fn add_kobuki(sim: &mut Simulation, params: ParamSet, support_z_m: f64, thickness: f64) -> Result<(Robot, f64)> {
     let body_mesh = parse(KOBUKI_COLLISION_OBJ, "kobuki_collision.obj")?;
     let suspension_free_m = suspension_free_coordinate_m(params, gravity(sim));
     let mut options = RobotOptions {
@@ -552,7 +552,8 @@ fn add_kobuki(sim: &mut Simulation, params: ParamSet, support_z_m: f64, thicknes
             },
         );
     }
-    sim.add_robot_from_str("kobuki", KOBUKI_URDF, "kobuki_paper.urdf", Path::new("."), &options)
+    let robot = sim.add_robot_from_str("kobuki", KOBUKI_URDF, "kobuki_paper.urdf", Path::new("."), &options)?;
+    Ok((robot, suspension_free_m))
 }
 
 /// Name of the probe log a built-in run writes: `<scene>.robot_towel.jsonl`.
@@ -643,11 +644,12 @@ mod tests {
             settings.contact.default_thickness_m = Some(thickness);
             let mut sim = Simulation::new(settings).unwrap();
             let floor = add_floor(&mut sim, 0.0, thickness).unwrap();
-            let robot = add_kobuki(&mut sim, params, DHAT_M, thickness).unwrap();
+            let (robot, free_m) = add_kobuki(&mut sim, params, DHAT_M, thickness).unwrap();
             for m in &robot.collision_meshes {
                 sim.contact.set_friction(m.contact, floor.contact, 1.0).unwrap();
             }
             let body = robot.body("base_link").unwrap();
+            let body_mesh = robot.collision_meshes.iter().find(|m| m.body == body).unwrap().nodes;
             let springs = ["suspension_left_joint", "suspension_right_joint"].map(|j| robot.joint(j).cloned().unwrap());
             sim.run(0.5).unwrap();
             let z_m = sim.body_position(body).z - DHAT_M;
@@ -655,17 +657,22 @@ mod tests {
             assert!((z_m - BODY_HEIGHT_M).abs() < 1e-3, "{params:?}: body centre at {z_m} m");
             let forward = sim.body_orientation(body) * Vector3::y();
             assert!(forward.z.abs() < 0.1f64.to_radians(), "{params:?}: pitch {}", forward.z);
-            let free_m = suspension_free_coordinate_m(params, 9.81);
             let spring_force_n: f64 = springs
                 .iter()
                 .map(|j| SUSPENSION_STIFFNESS_N_M * (sim.joint_state(j).coordinate.unwrap() - free_m))
                 .sum();
-            let sprung_weight_n = (body_mass_kg(params) + 2.0 * PART_MASS_KG) * 9.81;
+            let sprung_weight_n = (body_mass_kg(params) + 2.0 * PART_MASS_KG) * gravity(&sim);
             assert!(
                 spring_force_n > 0.8 * sprung_weight_n && spring_force_n <= sprung_weight_n,
                 "{params:?}: springs {spring_force_n} N of {sprung_weight_n} N"
             );
-            let mesh_bottom_m = z_m - 0.0419;
+            // The mesh reaches 41.9 mm below the body centre: 15.1 mm of clearance at 57 mm.
+            let mesh_bottom_m = sim
+                .positions(body_mesh)
+                .iter()
+                .map(|p| p.z)
+                .fold(f64::INFINITY, f64::min)
+                - DHAT_M;
             assert!(
                 (mesh_bottom_m - 0.0151).abs() < 1e-3,
                 "{params:?}: clearance {mesh_bottom_m}"

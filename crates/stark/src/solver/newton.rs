@@ -341,12 +341,12 @@ pub fn solve(
     // accepted by its residual, below).
     let mut assembled: Option<Assembled> = None;
     // The terms were last prepared (contact pairs detected) at the current iterate: the line
-    // search's accepted trial.
+    // search prepares each trial, the accepted one included.
     let mut prepared = false;
     for iteration in 0..settings.max_iterations {
         problem.place(v, &mut ws.x, &mut ws.poses);
         let t0 = Instant::now();
-        if assembled.is_none() && !std::mem::take(&mut prepared) {
+        if !std::mem::take(&mut prepared) {
             let state = problem.state(v, &ws.x, &ws.poses);
             for t in terms.iter_mut() {
                 t.prepare_evaluation(&state);
@@ -594,7 +594,6 @@ pub fn solve(
             }
             if e.is_finite() && armijo && (!unresolvable || e < energy - resolvable) {
                 accepted = true;
-                prepared = true;
                 break;
             }
             if e.is_finite() && unresolvable && e - energy < resolvable {
@@ -638,6 +637,7 @@ pub fn solve(
                 why,
             });
         }
+        prepared = true;
         if settings.majorizer_far_from_solution {
             // A full step: the model is trusted here, the exact Hessians converge faster. An
             // exact step cut below a quarter jumped across a regime change (a sliding contact
