@@ -236,7 +236,7 @@ mirror! {
         armijo: f64,
         max_line_search_iterations: usize,
         projection: Choice<stark::solver::settings::Projection>,
-        majorizer_far_from_solution: bool,
+        definite_far_from_solution: bool,
     }
 }
 

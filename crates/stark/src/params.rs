@@ -141,14 +141,14 @@ macro_rules! documented_struct {
         #[derive($($derive:path),* $(,)?)]
         $(#[serde($($serde:tt)*)])?
         pub struct $name:ident {
-            $( $(#[doc = $fdoc:literal])* pub $field:ident : $ty:ty ),* $(,)?
+            $( $(#[doc = $fdoc:literal])* $(#[serde($($fserde:tt)*)])? pub $field:ident : $ty:ty ),* $(,)?
         }
     ) => {
         $(#[doc = $doc])*
         #[derive($($derive),*)]
         $(#[serde($($serde)*)])?
         pub struct $name {
-            $( $(#[doc = $fdoc])* pub $field: $ty, )*
+            $( $(#[doc = $fdoc])* $(#[serde($($fserde)*)])? pub $field: $ty, )*
         }
 
         impl $crate::params::Documented for $name {

@@ -63,15 +63,16 @@ crate::params::documented_struct! {
         /// after a linear solve found the exact Hessian indefinite, for the rest of the step or
         /// until the next switch to exact Hessians, see below).
         pub projection: Projection,
-        /// Far from the solution, assemble the stand-ins that terms offer for their Hessians
-        /// (sliding friction: a majoriser with curvature along the slip too, so that a step cannot
-        /// jump across a solution that sticks; contact barriers: their positive semi-definite form),
-        /// and the exact Hessians once a step was taken in full (projection on demand starts over);
-        /// back to the stand-ins after an exact step had to be cut below a quarter. Where the exact
-        /// barrier Hessians make the total indefinite, their definite form until the residual fell
-        /// tenfold (default: true). Off: exact Hessians throughout, the barriers' definite form and
-        /// then projection on demand.
-        pub majorizer_far_from_solution: bool,
+        /// Far from the solution, the contact barriers' positive semi-definite Hessian form
+        /// (`contact.hessian`), and their exact Hessians once a step was taken in full
+        /// (projection on demand starts over); back to the definite form after an exact step had
+        /// to be cut below a quarter. Where the exact barrier Hessians make the total
+        /// indefinite, their definite form until the residual fell tenfold (default: true). Off:
+        /// exact Hessians throughout, the barriers' definite form and then projection on demand.
+        /// (Named `majorizer_far_from_solution` before friction's Hessian became primal–dual;
+        /// the old name is still read.)
+        #[serde(alias = "majorizer_far_from_solution")]
+        pub definite_far_from_solution: bool,
     }
 }
 
@@ -87,7 +88,7 @@ impl Default for NewtonSettings {
             armijo: 1e-4,
             max_line_search_iterations: 30,
             projection: Projection::OnDemand,
-            majorizer_far_from_solution: true,
+            definite_far_from_solution: true,
         }
     }
 }
@@ -277,6 +278,16 @@ mod tests {
     use crate::params::Documented;
     use serde::de::DeserializeOwned;
     use strum::VariantNames;
+
+    /// Scene files written before the rename still set the barriers' switch.
+    #[test]
+    fn the_switchs_old_name_is_read() {
+        let old: Settings = serde_json::from_str(r#"{"newton": {"majorizer_far_from_solution": false}}"#).unwrap();
+        assert!(!old.newton.definite_far_from_solution);
+        let new: Settings = serde_json::from_str(r#"{"newton": {"definite_far_from_solution": false}}"#).unwrap();
+        assert!(!new.newton.definite_far_from_solution);
+        assert!(Settings::default().newton.definite_far_from_solution);
+    }
 
     /// The names the bindings list (`VARIANTS`) are the names scene files and serde use.
     fn names_round_trip<E: VariantNames + DeserializeOwned + Serialize>() {

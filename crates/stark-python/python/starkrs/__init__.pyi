@@ -110,16 +110,16 @@ class NewtonSettings:
     """When element Hessians are projected: `always` or `on_demand` (default: `on_demand`:
     after a linear solve found the exact Hessian indefinite, for the rest of the step or
     until the next switch to exact Hessians, see below)."""
-    majorizer_far_from_solution: bool
-    """Far from the solution, assemble the stand-ins that terms offer for their Hessians
-    (sliding friction: a majoriser with curvature along the slip too, so that a step cannot
-    jump across a solution that sticks; contact barriers: their positive semi-definite form),
-    and the exact Hessians once a step was taken in full (projection on demand starts over);
-    back to the stand-ins after an exact step had to be cut below a quarter. Where the exact
-    barrier Hessians make the total indefinite, their definite form until the residual fell
-    tenfold (default: true). Off: exact Hessians throughout, the barriers' definite form and
-    then projection on demand."""
-    def __new__(cls, *, residual_tolerance_n: float = ..., step_tolerance_m_s: float = ..., max_iterations: int = ..., linear_solver: Literal["pcg", "cholesky"] = ..., cg_max_iterations: int = ..., cg_relative_tolerance: float = ..., armijo: float = ..., max_line_search_iterations: int = ..., projection: Literal["always", "on_demand"] = ..., majorizer_far_from_solution: bool = ...) -> NewtonSettings:
+    definite_far_from_solution: bool
+    """Far from the solution, the contact barriers' positive semi-definite Hessian form
+    (`contact.hessian`), and their exact Hessians once a step was taken in full
+    (projection on demand starts over); back to the definite form after an exact step had
+    to be cut below a quarter. Where the exact barrier Hessians make the total
+    indefinite, their definite form until the residual fell tenfold (default: true). Off:
+    exact Hessians throughout, the barriers' definite form and then projection on demand.
+    (Named `majorizer_far_from_solution` before friction's Hessian became primal–dual;
+    the old name is still read.)"""
+    def __new__(cls, *, residual_tolerance_n: float = ..., step_tolerance_m_s: float = ..., max_iterations: int = ..., linear_solver: Literal["pcg", "cholesky"] = ..., cg_max_iterations: int = ..., cg_relative_tolerance: float = ..., armijo: float = ..., max_line_search_iterations: int = ..., projection: Literal["always", "on_demand"] = ..., definite_far_from_solution: bool = ...) -> NewtonSettings:
         """Defaults of the library, with the given fields replaced."""
     def to_dict(self) -> dict[str, Any]:
         """The fields as a plain dict (nested settings as nested dicts)."""
@@ -189,7 +189,7 @@ class ContactSettings:
     """Positive semi-definite Hessian used for barrier pairs far from the solution and whenever
     the solver projects: `exact`, `projected`, `gauss_newton` or `adaptive` (default:
     `adaptive`); near the solution (once Newton took a full step, see
-    `NewtonSettings::majorizer_far_from_solution`) the pairs take their exact Hessian."""
+    `NewtonSettings::definite_far_from_solution`) the pairs take their exact Hessian."""
     ccd: bool
     """Continuous collision detection in the line search (default: true). Without it only the
     barrier keeps pairs apart, which fast motion can tunnel through."""

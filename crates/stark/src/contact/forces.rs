@@ -51,7 +51,7 @@ impl Contact {
         self.add_barrier_forces(&self.pairs, x, &mut normal);
         let mut d = HyperDual::<4>::constant(0.0);
         for f in &self.friction_elements {
-            f.derivatives(&Self::stencil_x(&f.nodes, x), false, &mut d);
+            f.derivatives(&Self::stencil_x(&f.nodes, x), &mut d);
             for (k, &i) in f.nodes[..f.len].iter().enumerate() {
                 if i != NO_DOF {
                     friction[i as usize] -= Vector3::from(d.grad[k]);

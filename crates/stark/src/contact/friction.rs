@@ -9,16 +9,18 @@
 //! (`ε_v` = the stick–slide velocity threshold). Sliding, the force `−∂D/∂x` has magnitude `μλ`
 //! opposite to the slip; sticking it is a spring of stiffness `2μλ/ε`.
 //!
-//! `D` depends on `x` only through the 2-vector `u`, whose Hessian
-//! `μλ [(f₁/y) I + ((f₁′y − f₁)/y³) u uᵀ]` is already positive semi-definite for this `f₀`
-//! (eigenvalues `f₁/y ≥ 0` and `f₁′ ≥ 0`), so no projection is needed.
-//!
-//! Sliding, that Hessian is flat along the slip, and a Newton step that stops or reverses the
-//! slip lands far beyond (the line search then cuts the whole step). Newton's globalisation
-//! replaces it by the majoriser `μλ (f₁/y) I` (IRLS: the element's own minimiser is zero slip):
-//! for all elements far from the solution, and per element for a few iterations after a step
-//! that would have carried its slip across zero ([`FrictionElement::stops_or_reverses`]; the
-//! contact term's `refine_hessian`).
+//! **The Hessian is the primal–dual one.** `D`'s exact Hessian in `u`,
+//! `μλ [(f₁/y) I + (f₁′ − f₁/y) û ûᵀ]`, has no curvature along a sliding slip, so Newton from a
+//! sliding iterate jumps far past a solution that sticks or reverses (a light rolling wheel, whose
+//! spin only friction holds: throws of several rad/s, cut to 1/256 by the line search). As in
+//! the primal–dual Newton method for total variation (Chan, Golub & Mulet 1999), each element
+//! carries the friction force's direction as a second unknown `w ≈ f₁(y) û` (`‖w‖ ≤ 1`): Newton
+//! on `{∇E_rest + μλ T w = 0, φ(y) w = u}` with `φ = y/f₁`, `w` eliminated, keeps the exact
+//! gradient and has the Hessian `μλ/φ [I − φ′ sym(w ûᵀ)]` in `u`, positive semi-definite for
+//! `‖w‖ ≤ 1` (`φ′ ∈ [¼, 1]`). With `w = f₁û` it is the exact Hessian (quadratic convergence at
+//! the end); with `w = 0`, where every step starts, the majoriser `μλ (f₁/y) I` (iteratively
+//! reweighted least squares); where the slip turns against `w` it adds up to `2μλ/y` along the
+//! slip. After each accepted Newton step `w` takes its Newton update ([`FrictionElement::update_dual`]).
 
 use crate::energy::{HyperDual, Scalar, Vec3};
 use nalgebra::Vector3;
@@ -44,14 +46,10 @@ pub struct FrictionElement {
     pub eps_m: f64,
     /// `Tᵀ Σᵢ cᵢ xᵢ⁰`, m.
     pub u0: [f64; 2],
-    /// Take the majorising Hessian while sliding (a Newton step carried this element's slip
-    /// across zero: see [`FrictionElement::stops_or_reverses`]).
-    pub majorize: bool,
-    /// Newton iterations this step that began with `majorize` set and in which the slip did
-    /// not halve.
-    pub majorized_iterations: u8,
-    /// The slip `‖u‖` at the start of the last majorised iteration, m.
-    pub majorized_slip_m: f64,
+    /// The dual variable `w`: the friction force over `−μλ` as the Newton iterations estimate
+    /// it (`f₁(y) û` at the solution, `‖w‖ ≤ 1`), in the tangent basis. Zero at the start of a
+    /// step.
+    pub dual: [f64; 2],
 }
 
 impl FrictionElement {
@@ -80,9 +78,7 @@ impl FrictionElement {
             mu_lambda,
             eps_m,
             u0: [t0.dot(&rel), t1.dot(&rel)],
-            majorize: false,
-            majorized_iterations: 0,
-            majorized_slip_m: f64::INFINITY,
+            dual: [0.0; 2],
         }
     }
 
@@ -96,23 +92,39 @@ impl FrictionElement {
         u
     }
 
-    /// Whether going from `from` (sliding) to `to` the slip along its current direction falls
-    /// below the stick threshold: the element would stop or reverse, and its exact sliding
-    /// Hessian (flat along the slip) predicted neither.
-    pub fn stops_or_reverses(&self, from: &[Vector3<f64>; 4], to: &[Vector3<f64>; 4]) -> bool {
-        let a = self.slip_f64(from);
-        let y = (a[0] * a[0] + a[1] * a[1]).sqrt();
-        if y < self.eps_m {
-            return false;
-        }
-        let b = self.slip_f64(to);
-        (a[0] * b[0] + a[1] * b[1]) / y < self.eps_m
+    /// `‖u‖`, regularised at zero slip, m.
+    fn slip_norm(&self, u: &[f64; 2]) -> f64 {
+        (u[0] * u[0] + u[1] * u[1] + (SLIP_REGULARISER * self.eps_m).powi(2)).sqrt()
     }
 
-    /// `‖u‖` at `x`, m.
-    pub fn slip_norm(&self, x: &[Vector3<f64>; 4]) -> f64 {
-        let a = self.slip_f64(x);
-        (a[0] * a[0] + a[1] * a[1]).sqrt()
+    /// `φ(y) = y/f₁(y)` (m) and `φ′(y)`: `y` sliding, `ε²/(2ε − y)` sticking.
+    fn phi(&self, y: f64) -> (f64, f64) {
+        let eps = self.eps_m;
+        if y < eps {
+            let d = 2.0 * eps - y;
+            (eps * eps / d, eps * eps / (d * d))
+        } else {
+            (y, 1.0)
+        }
+    }
+
+    /// The dual variable's Newton update for the accepted step `from → to`: the linearisation
+    /// of `φ(y) w = u` at `from`, `w ← (u_to − φ′ (û·Δu) w) / φ`, projected onto `‖w‖ ≤ 1`. A
+    /// zero step sets `w = f₁(y) û`, its value at the solution.
+    pub fn update_dual(&mut self, from: &[Vector3<f64>; 4], to: &[Vector3<f64>; 4]) {
+        let a = self.slip_f64(from);
+        let b = self.slip_f64(to);
+        let y = self.slip_norm(&a);
+        let (phi, dphi) = self.phi(y);
+        let along = (a[0] * (b[0] - a[0]) + a[1] * (b[1] - a[1])) / y;
+        let w = self.dual;
+        let next = [(b[0] - dphi * along * w[0]) / phi, (b[1] - dphi * along * w[1]) / phi];
+        let norm = (next[0] * next[0] + next[1] * next[1]).sqrt();
+        self.dual = if norm > 1.0 {
+            [next[0] / norm, next[1] / norm]
+        } else {
+            next
+        };
     }
 
     fn slip<S: Scalar>(&self, x: &[Vec3<S>; 4]) -> [S; 2] {
@@ -139,32 +151,30 @@ impl FrictionElement {
         f0 * self.mu_lambda
     }
 
-    /// Value, gradient and Hessian (closed form, PSD) into `out`; unused nodes get zeros. With
-    /// `majorizer`, a sliding element's Hessian is `μλ (f₁/y) I` instead: the exact one has no
-    /// curvature along the slip, so Newton from a sliding iterate jumps far past a solution that
-    /// sticks (a light rolling wheel: its spin is held by friction alone).
-    pub fn derivatives(&self, x: &[Vector3<f64>; 4], majorizer: bool, out: &mut HyperDual<4>) {
+    /// Value, gradient and the primal–dual Hessian (closed form, positive semi-definite; see
+    /// the module's doc) into `out`; unused nodes get zeros.
+    pub fn derivatives(&self, x: &[Vector3<f64>; 4], out: &mut HyperDual<4>) {
         let u = self.slip_f64(x);
-        let majorizer = majorizer || self.majorize;
         let eps = self.eps_m;
-        let y = (u[0] * u[0] + u[1] * u[1] + (SLIP_REGULARISER * eps).powi(2)).sqrt();
+        let y = self.slip_norm(&u);
         let ml = self.mu_lambda;
-        // f₀, f₁/y and (f₁′y − f₁)/y³.
-        let (f0, f1_over_y, q) = if y < eps {
+        let (f0, f1) = if y < eps {
             (
                 -y * y * y / (3.0 * eps * eps) + y * y / eps + eps / 3.0,
-                -y / (eps * eps) + 2.0 / eps,
-                -1.0 / (y * eps * eps),
+                y * (2.0 * eps - y) / (eps * eps),
             )
-        } else if majorizer {
-            (y, 1.0 / y, 0.0)
         } else {
-            (y, 1.0 / y, -1.0 / (y * y * y))
+            (y, 1.0)
         };
-        let gu = [ml * f1_over_y * u[0], ml * f1_over_y * u[1]];
+        let gu = [ml * f1 * u[0] / y, ml * f1 * u[1] / y];
+        let (phi, dphi) = self.phi(y);
+        let unit = [u[0] / y, u[1] / y];
+        let w = self.dual;
+        let sym = |k: usize, l: usize| 0.5 * (w[k] * unit[l] + unit[k] * w[l]);
+        let c = ml / phi;
         let hu = [
-            [ml * (f1_over_y + q * u[0] * u[0]), ml * q * u[0] * u[1]],
-            [ml * q * u[1] * u[0], ml * (f1_over_y + q * u[1] * u[1])],
+            [c * (1.0 - dphi * sym(0, 0)), -c * dphi * sym(0, 1)],
+            [-c * dphi * sym(1, 0), c * (1.0 - dphi * sym(1, 1))],
         ];
         out.value = ml * f0;
         // ∂u_k/∂x_{i,d} = c_i T_k[d]: the gradient is c_i (T g_u) and the Hessian's block (i, j)
@@ -218,8 +228,11 @@ mod tests {
             let mut x = x0;
             x[0] += Vector3::new(slip * 0.8, slip * 0.6, 1e-4);
             x[2] += Vector3::new(-slip * 0.1, 0.0, 0.0);
+            // With the dual variable at its value for this slip, the exact Hessian.
+            let mut el = el;
+            el.update_dual(&x, &x);
             let mut fast = HyperDual::<4>::constant(0.0);
-            el.derivatives(&x, false, &mut fast);
+            el.derivatives(&x, &mut fast);
             let mut oracle = el.energy(&HyperDual::<4>::variables(&x));
             symmetrize(&mut oracle);
             assert!((fast.value - oracle.value).abs() < 1e-12);
@@ -239,26 +252,30 @@ mod tests {
         }
     }
 
-    /// The sliding stand-in majorises the friction energy around the iterate (`f₀(√s)` is
-    /// concave in `s = ‖u‖²`): the quadratic model with it lies above `D` everywhere, so a full
-    /// step on it cannot increase the friction energy, whereas the exact Hessian's model (no
-    /// curvature along the slip) lies below `D` for steps across the stick zone.
+    /// At `w = 0` (each step's start) the Hessian is the majoriser `μλ (f₁/y) I`: the quadratic
+    /// model lies above `D` everywhere (`f₀(√s)` is concave in `s = ‖u‖²`), so a full step on it
+    /// cannot raise the friction energy, whereas the exact Hessian's model (no curvature along
+    /// the slip) lies below `D` for steps across the stick zone. For any `‖w‖ ≤ 1` the Hessian is
+    /// positive semi-definite.
     #[test]
-    fn sliding_majorizer_lies_above_the_energy() {
+    fn zero_dual_majorises_and_every_dual_is_definite() {
         let x0 = [Vector3::zeros(); 4];
         let (ml, eps) = (2.0, 1e-4);
         let el = FrictionElement::new([0, 0, 0, 0], 1, [1.0, 0.0, 0.0, 0.0], Vector3::z(), &x0, ml, eps);
         let energy = |p: Vector3<f64>| {
             let mut d = HyperDual::<4>::constant(0.0);
-            el.derivatives(&[p, p, p, p], false, &mut d);
+            el.derivatives(&[p, p, p, p], &mut d);
             d.value
         };
         let mut below_exact = 0;
-        for (slip, dir) in [(3e-3, 0.3), (2e-4, 1.1), (1.5e-4, -2.0), (0.05, 2.5)] {
+        for (slip, dir) in [(3e-3, 0.3), (2e-4, 1.1), (1.5e-4, -2.0), (0.05, 2.5), (5e-5, 0.7)] {
             let x = Vector3::new(slip * f64::cos(dir), slip * f64::sin(dir), 0.0);
-            for maj in [true, false] {
+            let at = [x, x0[1], x0[2], x0[3]];
+            let mut consistent = el;
+            consistent.update_dual(&at, &at);
+            for (el, majorises) in [(el, true), (consistent, false)] {
                 let mut d = HyperDual::<4>::constant(0.0);
-                el.derivatives(&[x, x0[1], x0[2], x0[3]], maj, &mut d);
+                el.derivatives(&at, &mut d);
                 let g = Vector3::from(d.grad[0]);
                 let h = nalgebra::Matrix3::from_fn(|i, j| d.hess[0][i][0][j]);
                 for k in 0..200 {
@@ -268,54 +285,111 @@ mod tests {
                         + Vector3::new(a.cos(), a.sin(), 0.0) * (eps * (k % 7) as f64);
                     let model = d.value + g.dot(&step) + 0.5 * step.dot(&(h * step));
                     let truth = energy(x + step);
-                    if maj {
+                    if majorises {
                         assert!(model >= truth - 1e-12 * ml, "slip {slip}, trial {k}: {model} < {truth}");
                     } else if model < truth - 1e-9 * ml {
                         below_exact += 1;
                     }
                 }
             }
+            // Any dual in the unit disc: the smallest eigenvalue is not negative.
+            for k in 0..50 {
+                let (r, a) = ((k % 5) as f64 / 4.0, 0.37 * k as f64);
+                let mut el = el;
+                el.dual = [r * a.cos(), r * a.sin()];
+                let mut d = HyperDual::<4>::constant(0.0);
+                el.derivatives(&at, &mut d);
+                let h = nalgebra::Matrix3::from_fn(|i, j| d.hess[0][i][0][j]);
+                let smallest = h.symmetric_eigenvalues().min();
+                assert!(
+                    smallest > -1e-12 * h.norm(),
+                    "dual {:?}, slip {slip}: {smallest}",
+                    el.dual
+                );
+            }
         }
         assert!(below_exact > 0, "the exact model was expected to undershoot somewhere");
     }
 
-    /// A step is flagged as crossing the kink exactly when the slip along its current direction
-    /// would fall below the stick threshold (stop or reverse); sticking elements are never
-    /// flagged, and the per-element flag switches the sliding Hessian to the majoriser.
+    /// One point under a spring pulling it to `a` (`½k‖x − a‖²`) against friction: Newton with
+    /// the primal–dual Hessian and a backtracking line search converges to the analytic
+    /// equilibrium in few iterations, sticking (`k‖a‖ < μλ`: `k(y − ‖a‖) + μλ f₁(y) = 0` along
+    /// `a`) and sliding (`x = a (1 − μλ/(k‖a‖))`), from starts that slide the wrong way, where
+    /// the exact Hessian (no curvature along the slip) throws the iterate far across the stick
+    /// zone and needs the line search to cut it.
     #[test]
-    fn steps_that_stop_or_reverse_a_slide_are_flagged() {
+    fn primal_dual_newton_finds_the_stick_and_the_slide() {
         let x0 = [Vector3::zeros(); 4];
-        let eps = 1e-4;
-        let mut el = FrictionElement::new([0, 0, 0, 0], 1, [1.0, 0.0, 0.0, 0.0], Vector3::z(), &x0, 2.0, eps);
-        let at = |x: f64, y: f64| [Vector3::new(x, y, 0.0), x0[1], x0[2], x0[3]];
-        // Sliding along +x at 10ε.
-        let from = at(10.0 * eps, 0.0);
-        assert!(el.slip_norm(&from) >= eps);
-        assert!(
-            !el.stops_or_reverses(&from, &at(20.0 * eps, 3.0 * eps)),
-            "keeps sliding"
-        );
-        assert!(
-            !el.stops_or_reverses(&from, &at(2.0 * eps, 0.0)),
-            "slows, still beyond ε"
-        );
-        assert!(el.stops_or_reverses(&from, &at(0.5 * eps, 0.0)), "stops");
-        assert!(el.stops_or_reverses(&from, &at(-5.0 * eps, 0.0)), "reverses");
-        assert!(
-            el.stops_or_reverses(&from, &at(0.0, 30.0 * eps)),
-            "turns across the slip"
-        );
-        // Sticking now: the exact Hessian has the stick curvature, no flag.
-        assert!(!el.stops_or_reverses(&at(0.5 * eps, 0.0), &at(-5.0 * eps, 0.0)));
-        // The flag gives the majoriser's curvature μλ/‖u‖ along the slip.
-        let hessian_xx = |el: &FrictionElement| {
-            let mut d = HyperDual::<4>::constant(0.0);
-            el.derivatives(&from, false, &mut d);
-            d.hess[0][0][0][0]
+        let (ml, eps) = (1.0, 1e-4);
+        let el0 = FrictionElement::new([0, 0, 0, 0], 1, [1.0, 0.0, 0.0, 0.0], Vector3::z(), &x0, ml, eps);
+        let solve = |k: f64, a: Vector3<f64>, start: Vector3<f64>, exact: bool| -> (Vector3<f64>, usize) {
+            let mut el = el0;
+            let mut x = start;
+            let derivs = |el: &FrictionElement, x: Vector3<f64>| {
+                let mut d = HyperDual::<4>::constant(0.0);
+                el.derivatives(&[x, x0[1], x0[2], x0[3]], &mut d);
+                let g = Vector3::from(d.grad[0]) + k * (x - a);
+                let h = nalgebra::Matrix3::from_fn(|i, j| d.hess[0][i][0][j]) + nalgebra::Matrix3::identity() * k;
+                (d.value + 0.5 * k * (x - a).norm_squared(), g, h)
+            };
+            for it in 0..100 {
+                if exact {
+                    el.update_dual(&[x, x0[1], x0[2], x0[3]], &[x, x0[1], x0[2], x0[3]]);
+                }
+                let (e, g, h) = derivs(&el, x);
+                if g.norm() < 1e-12 {
+                    return (x, it);
+                }
+                let dx = -h.cholesky().expect("positive definite").solve(&g);
+                let mut alpha = 1.0;
+                while derivs(&el, x + dx * alpha).0 > e + 1e-4 * alpha * g.dot(&dx) {
+                    alpha *= 0.5;
+                }
+                let next = x + dx * alpha;
+                el.update_dual(&[x, x0[1], x0[2], x0[3]], &[next, x0[1], x0[2], x0[3]]);
+                x = next;
+            }
+            panic!("no convergence: k {k}, a {a:?}, start {start:?}, exact {exact}");
         };
-        assert!(hessian_xx(&el).abs() < 1e-9);
-        el.majorize = true;
-        assert!((hessian_xx(&el) - 2.0 / (10.0 * eps)).abs() < 1e-6 * 2.0 / eps);
+        let a_dir = Vector3::new(0.6, 0.8, 0.0);
+        // Sticking: the spring pulls with half the friction bound; the equilibrium slip by
+        // bisection on k(y − ‖a‖) + μλ f₁(y) = 0.
+        let (k, a_norm) = (100.0, 5e-3);
+        let f1 = |y: f64| {
+            if y < eps {
+                y * (2.0 * eps - y) / (eps * eps)
+            } else {
+                1.0
+            }
+        };
+        let (mut lo, mut hi) = (0.0, eps);
+        for _ in 0..200 {
+            let mid = 0.5 * (lo + hi);
+            if k * (mid - a_norm) + ml * f1(mid) > 0.0 {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
+        }
+        let stick = a_dir * lo;
+        // Sliding: the spring pulls with four times the bound.
+        let (k2, a2) = (400.0, 1e-2);
+        let slide = a_dir * (a2 - ml / k2);
+        let mut exact_iterations = 0;
+        let mut pd_iterations = 0;
+        for (k, a, expected) in [(k, a_dir * a_norm, stick), (k2, a_dir * a2, slide)] {
+            for start in [-a_dir * 3e-3, Vector3::new(0.8, -0.6, 0.0) * 2e-3, a_dir * 2e-2] {
+                let (x, its) = solve(k, a, start, false);
+                assert!((x - expected).norm() < 1e-9, "k {k}: {x:?} vs {expected:?}");
+                assert!(its <= 12, "k {k}, start {start:?}: {its} iterations");
+                pd_iterations += its;
+                exact_iterations += solve(k, a, start, true).1;
+            }
+        }
+        assert!(
+            pd_iterations < exact_iterations,
+            "primal–dual {pd_iterations} vs exact {exact_iterations} iterations"
+        );
     }
 
     /// A re-lag (`friction_iterations` > 1) takes the normal force, tangents and weights from the

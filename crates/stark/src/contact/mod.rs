@@ -66,7 +66,7 @@ crate::params::documented_struct! {
         /// Positive semi-definite Hessian used for barrier pairs far from the solution and whenever
         /// the solver projects: `exact`, `projected`, `gauss_newton` or `adaptive` (default:
         /// `adaptive`); near the solution (once Newton took a full step, see
-        /// `NewtonSettings::majorizer_far_from_solution`) the pairs take their exact Hessian.
+        /// `NewtonSettings::definite_far_from_solution`) the pairs take their exact Hessian.
         pub hessian: PairHessian,
         /// Continuous collision detection in the line search (default: true). Without it only the
         /// barrier keeps pairs apart, which fast motion can tunnel through.
@@ -204,8 +204,6 @@ pub struct Contact {
     version: u64,
     relag_pending: bool,
     lag_solves: usize,
-    /// Newton asked for the friction Hessian's majorising stand-in (`use_majorizer_hessian`).
-    friction_majorizer: bool,
     /// Newton asked for the barrier pairs' positive semi-definite Hessian, `settings.hessian`
     /// (`use_definite_hessian`); otherwise they take their exact one.
     definite_barriers: bool,
@@ -238,7 +236,6 @@ impl Default for Contact {
             version: 0,
             relag_pending: false,
             lag_solves: 0,
-            friction_majorizer: false,
             definite_barriers: true,
             stats: ContactStats {
                 min_distance_m: f64::INFINITY,

@@ -12,11 +12,6 @@ use crate::energy::{EnergyTerm, EvalMode, HyperDual, Scalar, StepCheck, Vec3};
 use crate::error::Result;
 use crate::state::EvalState;
 
-/// Newton iterations per step, without halving its slip, for which a friction element that a
-/// step would carry across zero slip takes the majorising Hessian (`refine_hessian`; 4 and 6
-/// measured alike on the folded towel, 2 and 8 worse).
-const MAJORIZED_ITERATIONS_PER_ELEMENT: u8 = 4;
-
 /// How the nodes of a pair (padded with `NO_DOF`) depend on the DOFs.
 pub(super) fn node_maps<'s>(nodes: &[u32; 4], state: &'s EvalState) -> [NodeMap<'s>; 4] {
     nodes.map(|i| {
@@ -108,7 +103,7 @@ impl EnergyTerm for Contact {
             );
         } else {
             let f = &self.friction_elements[e - self.pairs.len()];
-            f.derivatives(&Self::stencil_x(&f.nodes, state.x), self.friction_majorizer, &mut d);
+            f.derivatives(&Self::stencil_x(&f.nodes, state.x), &mut d);
         }
         if out.len() == element_stride(4) {
             write_deformable_element(&d, state.dt, out);
@@ -156,29 +151,10 @@ impl EnergyTerm for Contact {
         }
         self.version += 1;
     }
-    fn use_majorizer_hessian(&mut self, on: bool) {
-        self.friction_majorizer = on;
-    }
-    fn refine_hessian(&mut self, from: &EvalState, to: &EvalState) {
+    fn accept_iterate(&mut self, from: &EvalState, to: &EvalState) {
+        // Friction's dual variables follow the step (`friction`'s primal–dual Hessian).
         for f in self.friction_elements.iter_mut() {
-            let x_from = Self::stencil_x(&f.nodes, from.x);
-            if f.majorize {
-                // The majoriser pulls the slip toward zero by the ratio of its curvature to the
-                // rest: slowly where the element sits at the edge of the friction cone. After a
-                // few iterations without halving the slip, the exact Hessian again (and the
-                // line search).
-                let slip_m = f.slip_norm(&x_from);
-                if slip_m > 0.5 * f.majorized_slip_m {
-                    f.majorized_iterations += 1;
-                }
-                f.majorized_slip_m = slip_m;
-                f.majorize = f.majorized_iterations < MAJORIZED_ITERATIONS_PER_ELEMENT;
-            } else if f.majorized_iterations < MAJORIZED_ITERATIONS_PER_ELEMENT
-                && f.stops_or_reverses(&x_from, &Self::stencil_x(&f.nodes, to.x))
-            {
-                f.majorize = true;
-                f.majorized_slip_m = f.slip_norm(&x_from);
-            }
+            f.update_dual(&Self::stencil_x(&f.nodes, from.x), &Self::stencil_x(&f.nodes, to.x));
         }
     }
     fn use_definite_hessian(&mut self, on: bool) -> bool {

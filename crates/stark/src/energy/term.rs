@@ -79,14 +79,7 @@ pub trait EnergyTerm: Send + Sync {
     /// Called before every evaluation (contact updates its active set here).
     fn prepare_evaluation(&mut self, _state: &EvalState) {}
 
-    /// Newton's globalisation: with `true`, a term whose exact Hessian makes Newton overshoot far
-    /// from the solution may assemble a positive semi-definite stand-in that majorises its
-    /// energy around the iterate (safe full steps, linear convergence); with `false` (the
-    /// default), its exact Hessian (quadratic convergence). Friction is the user: see
-    /// `contact::friction`.
-    fn use_majorizer_hessian(&mut self, _on: bool) {}
-
-    /// Newton's globalisation, second switch: with `true`, a term whose exact Hessian is
+    /// Newton's globalisation: with `true`, a term whose exact Hessian is
     /// indefinite near its active set assembles a positive semi-definite form (contact
     /// barriers, far from the solution and where their exact Hessians made the total
     /// indefinite); with `false` (the default), its exact Hessian. The solver still projects
@@ -97,12 +90,10 @@ pub trait EnergyTerm: Send + Sync {
         false
     }
 
-    /// Newton's globalisation, per element, called once per Newton iteration: after the
-    /// direction is solved, `to` is the state a full step from `from` would reach. A term whose elements the step carries across
-    /// a kink that their exact Hessian does not see (a sliding friction element whose slip would
-    /// stop or reverse: its exact Hessian has no curvature along the slip) may switch those
-    /// elements to a majorising Hessian for the next assemblies (a few iterations).
-    fn refine_hessian(&mut self, _from: &EvalState, _to: &EvalState) {}
+    /// Called when Newton accepts the iterate `to` (after the line search) coming from `from`:
+    /// a term with auxiliary unknowns of its own updates them here (friction's dual
+    /// variables, `contact::friction`).
+    fn accept_iterate(&mut self, _from: &EvalState, _to: &EvalState) {}
 
     /// Called once per step after the first assembly, with the total gradient (DOF space) at
     /// `state`: a term may re-scale itself to balance the others (contact raises its barrier

@@ -277,12 +277,12 @@ mod tests {
         }
         let mut settings = Settings::default();
         settings.newton.residual_tolerance_n = 3e-7;
-        settings.newton.majorizer_far_from_solution = false;
+        settings.newton.definite_far_from_solution = false;
         let mut older = serde_json::to_value(&settings).unwrap();
         older["newton"]
             .as_object_mut()
             .unwrap()
-            .remove("majorizer_far_from_solution");
+            .remove("definite_far_from_solution");
         #[derive(Serialize)]
         struct OlderHolder(#[serde(with = "bytes_of")] serde_json::Value);
         mod bytes_of {
@@ -293,7 +293,7 @@ mod tests {
         let file = postcard::to_allocvec(&OlderHolder(older)).unwrap();
         let back: Holder = postcard::from_bytes(&file).unwrap();
         assert_eq!(back.settings.newton.residual_tolerance_n, 3e-7);
-        assert!(back.settings.newton.majorizer_far_from_solution, "the default");
+        assert!(back.settings.newton.definite_far_from_solution, "the default");
         // And the current settings round-trip exactly.
         let file = postcard::to_allocvec(&Holder {
             settings: settings.clone(),

@@ -205,10 +205,10 @@ fn axpy_velocities(dofs: &DofMap, base: &[Vector3<f64>], step: &[f64], alpha: f6
     }
 }
 
-/// One of Newton's globalisation switches (the friction majoriser, the barriers' definite
-/// form), with its hysteresis: on far from the solution; off once a step is taken in full (the
-/// quadratic model is trusted there) and the residual is below where the switch was last forced
-/// on; on again after a step cut below a quarter (it jumped across a regime change).
+/// Newton's globalisation switch for the barriers' definite Hessian form, with its hysteresis:
+/// on far from the solution; off once a step is taken in full (the quadratic model is trusted
+/// there) and the residual is below where the switch was last forced on; on again after a step
+/// cut below a quarter (it jumped across a regime change).
 struct FarFromSolution {
     on: bool,
     /// Residual above which the switch stays on, N (infinite: no such bound).
@@ -314,14 +314,9 @@ pub fn solve(
         report.times.ccd_s += t0.elapsed().as_secs_f64();
     }
 
-    // Far from the solution (until a step is taken in full) the majorising Hessians.
-    let mut majorizer = FarFromSolution::new(settings.majorizer_far_from_solution);
-    for t in terms.iter_mut() {
-        t.use_majorizer_hessian(majorizer.on);
-    }
-    // Likewise the positive semi-definite forms of the Hessians that are indefinite near their
-    // active set (contact barriers).
-    let mut definite = FarFromSolution::new(settings.majorizer_far_from_solution);
+    // Far from the solution (until a step is taken in full) the positive semi-definite forms of
+    // the Hessians that are indefinite near their active set (contact barriers).
+    let mut definite = FarFromSolution::new(settings.definite_far_from_solution);
     for t in terms.iter_mut() {
         t.use_definite_hessian(definite.on);
     }
@@ -330,7 +325,7 @@ pub fn solve(
     let mut first_residual: Option<f64> = None;
     let mut rebalanced = false;
     // A Cholesky factorisation of this step's Hessian exists, made with the Hessian forms in use
-    // now (a switch of the majoriser, the barriers' form or projection changes the Hessian far
+    // now (a switch of the barriers' form or of projection changes the Hessian far
     // more than an iteration does: a fresh factor then).
     let mut factor_reusable = false;
     // The last attempt to reuse it failed: the Hessian moves fast, factorise directly once.
@@ -518,12 +513,6 @@ pub fn solve(
         let mut alpha = {
             let from = problem.state(v, &ws.x, &ws.poses);
             let to = problem.state(&ws.trial_v, &ws.trial_x, &ws.trial_poses);
-            // Elements that the full step carries across a kink their Hessian does not see
-            // (friction that would stop sliding) take a majorising Hessian from the next
-            // assembly on (re-solving now costs more than the iteration it would save).
-            for t in terms.iter_mut() {
-                t.refine_hessian(&from, &to);
-            }
             max_step(terms, &from, &to)
         };
         report.times.ccd_s += t_ccd.elapsed().as_secs_f64();
@@ -638,20 +627,21 @@ pub fn solve(
             });
         }
         prepared = true;
-        if settings.majorizer_far_from_solution {
-            // A full step: the model is trusted here, the exact Hessians converge faster. An
-            // exact step cut below a quarter jumped across a regime change (a sliding contact
-            // that sticks at the solution): back to the majorisers.
-            if majorizer.after_step(alpha, residual) {
-                factor_reusable = false;
-                for t in terms.iter_mut() {
-                    t.use_majorizer_hessian(majorizer.on);
-                }
+        {
+            // Terms' own unknowns follow the accepted step (friction's dual variables).
+            let from = problem.state(v, &ws.x, &ws.poses);
+            let to = problem.state(&ws.trial_v, &ws.trial_x, &ws.trial_poses);
+            for t in terms.iter_mut() {
+                t.accept_iterate(&from, &to);
             }
-            // The barriers' exact Hessians likewise, once the residual is also below where they
-            // last made the Hessian indefinite. Their definite (projected) form overestimates
-            // the curvature that the other energies carry near the solution, and Newton would
-            // converge only linearly (a folded towel under a robot: by 0.69 per iteration).
+        }
+        if settings.definite_far_from_solution {
+            // A full step: the model is trusted here; the barriers' exact Hessians, once the
+            // residual is also below where they last made the Hessian indefinite. An exact
+            // step cut below a quarter jumped across a regime change: back to the definite
+            // form. The definite form overestimates the curvature that the other energies
+            // carry near the solution, and Newton would converge only linearly there (a folded
+            // towel under a robot: by 0.69 per iteration).
             if definite.after_step(alpha, residual) {
                 factor_reusable = false;
                 if !definite.on && settings.projection == Projection::OnDemand {
@@ -667,8 +657,7 @@ pub fn solve(
             // Diagnostics: one line per iteration on stderr (the residual, the accepted step
             // fraction, the Hessians used, the DOF block of the step's largest entry).
             eprintln!(
-                "it {iteration:2} res {residual:.3e} alpha {alpha:.3e} maj {} def {} proj {project} ls {} cg {} step {:.3e} at {}",
-                majorizer.on,
+                "it {iteration:2} res {residual:.3e} alpha {alpha:.3e} def {} proj {project} ls {} cg {} step {:.3e} at {}",
                 definite.on,
                 report.line_search_evaluations,
                 report.cg_iterations,

@@ -14,9 +14,11 @@
 //! carries ~8 mN, so the pairs' curvature across (force / distance, ~10 N/m) outweighs the
 //! membrane's (E·h = 5 N/m) and the nodes' inertia (m/dt², ~1 N/m). Then the cloth is pushed down
 //! at 5 cm/s and one step is solved to 1e-9 N. Claim: once the residual is below 1e-4 of the
-//! step's first, every iteration divides it by more than 10 and by more than the iteration before
-//! did, down to 1e-10 N (below, the forces' rounding floor of a few 1e-11 N). Measured: 1.7e-5,
-//! 6.3e-7, 1.1e-9 N: ratios 0.037, 0.0018.
+//! step's first, it reaches 1e-9 N in at most three iterations (a linear contraction of 0.69
+//! would take about 30), every iteration divides it by more than 10, and by more than the
+//! iteration before did while above 1e-10 N (the forces' rounding floor is a few 1e-11 N).
+//! Measured: 5.1e-6, 2.8e-9, 4.1e-11 N (ratios 5.6e-4, 0.014); 9 iterations in all (with the
+//! friction majoriser that preceded the primal–dual Hessian, 14: 2.1e-5, 6.8e-7, 8.9e-10 N).
 //!
 //! Every Hessian projected (`Projection::Always`) converges about as fast here (19 iterations
 //! against 17, a tail as steep): the membrane and the friction hold enough curvature; the 0.69
@@ -82,23 +84,23 @@ fn pushed_step_residuals() -> Vec<f64> {
 fn newton_converges_quadratically_at_a_resting_contact() {
     let residuals = pushed_step_residuals();
     let r0 = residuals[0];
-    // Below 1e-10 N the residual is at the forces' rounding floor (a few 1e-11 N here).
-    let tail: Vec<f64> = residuals
-        .iter()
-        .copied()
-        .skip_while(|&r| r > 1e-4 * r0)
-        .take_while(|&r| r > 1e-10)
-        .collect();
-    assert!(tail.len() >= 3, "the tail reaches below 1e-4 r0: {residuals:?}");
+    let tail: Vec<f64> = residuals.iter().copied().skip_while(|&r| r > 1e-4 * r0).collect();
+    assert!(
+        tail.len() <= 4 && tail.last().is_some_and(|&r| r < 1e-9),
+        "at most three iterations from 1e-4 r0 to 1e-9 N: {residuals:?}"
+    );
     let ratios: Vec<f64> = tail.windows(2).map(|w| w[1] / w[0]).collect();
     assert!(
         ratios.iter().all(|&q| q < 0.1),
         "ratios {ratios:?}, residuals {residuals:?}"
     );
-    for pair in ratios.windows(2) {
-        assert!(
-            pair[1] < pair[0],
-            "superlinear: ratios {ratios:?}, residuals {residuals:?}"
-        );
+    // Superlinear while above the rounding floor.
+    for (k, pair) in ratios.windows(2).enumerate() {
+        if tail[k + 2] > 1e-10 {
+            assert!(
+                pair[1] < pair[0],
+                "superlinear: ratios {ratios:?}, residuals {residuals:?}"
+            );
+        }
     }
 }
