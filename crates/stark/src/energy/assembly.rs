@@ -136,18 +136,57 @@ fn merge_sorted(a: &[(u32, u32)], b: &[(u32, u32)]) -> Vec<(u32, u32)> {
     out
 }
 
-/// The block pairs `(row, column)` of `stencils` (`width` each), sorted and deduplicated.
-fn block_pairs(stencils: &[u32], width: usize) -> Vec<(u32, u32)> {
-    let mut pairs: Vec<(u32, u32)> = Vec::new();
-    for st in stencils.chunks_exact(width.max(1)) {
+/// The block pairs `(row, column)` of `stencils` (`width` each, blocks below `n_blocks`),
+/// sorted and deduplicated. The columns are bucketed by row first (a counting sort), so only the
+/// short rows are sorted: a global sort of the ~3M pairs of a folded towel's contact took 5% of
+/// its run.
+fn block_pairs(stencils: &[u32], width: usize, n_blocks: usize) -> Vec<(u32, u32)> {
+    let width = width.max(1);
+    let mut row_start = vec![0usize; n_blocks + 1];
+    for st in stencils.chunks_exact(width) {
+        let valid = st.iter().filter(|&&b| b != NO_DOF).count();
+        for &r in st.iter().filter(|&&r| r != NO_DOF) {
+            row_start[r as usize + 1] += valid;
+        }
+    }
+    for r in 0..n_blocks {
+        row_start[r + 1] += row_start[r];
+    }
+    let mut columns = vec![0u32; row_start[n_blocks]];
+    let mut fill = row_start.clone();
+    for st in stencils.chunks_exact(width) {
         for &r in st.iter().filter(|&&r| r != NO_DOF) {
             for &c in st.iter().filter(|&&c| c != NO_DOF) {
-                pairs.push((r, c));
+                columns[fill[r as usize]] = c;
+                fill[r as usize] += 1;
             }
         }
     }
-    pairs.par_sort_unstable();
-    pairs.dedup();
+    let mut rows: Vec<&mut [u32]> = Vec::with_capacity(n_blocks);
+    let mut rest = columns.as_mut_slice();
+    for r in 0..n_blocks {
+        let (row, tail) = rest.split_at_mut(row_start[r + 1] - row_start[r]);
+        rows.push(row);
+        rest = tail;
+    }
+    let unique: Vec<usize> = rows
+        .par_iter_mut()
+        .map(|row| {
+            row.sort_unstable();
+            let mut len = 0;
+            for k in 0..row.len() {
+                if len == 0 || row[k] != row[len - 1] {
+                    row[len] = row[k];
+                    len += 1;
+                }
+            }
+            len
+        })
+        .collect();
+    let mut pairs = Vec::with_capacity(unique.iter().sum());
+    for (r, (row, &len)) in rows.iter().zip(&unique).enumerate() {
+        pairs.extend(row[..len].iter().map(|&c| (r as u32, c)));
+    }
     pairs
 }
 
@@ -247,7 +286,7 @@ impl Assembler {
             for layout in &mut self.layouts {
                 let term_pairs = layout
                     .pairs
-                    .get_or_insert_with(|| block_pairs(&layout.stencils, layout.width));
+                    .get_or_insert_with(|| block_pairs(&layout.stencils, layout.width, n_blocks));
                 pairs = merge_sorted(&pairs, term_pairs);
             }
             let old_pairs = (self.matrix.n_blocks == n_blocks).then(|| self.matrix.pattern_pairs());
@@ -414,6 +453,36 @@ mod tests {
     use super::*;
     use crate::state::{BodyArrays, NodeArrays};
     use nalgebra::Vector3;
+
+    /// The bucketed pair list equals the plainly sorted and deduplicated one.
+    #[test]
+    fn block_pairs_are_sorted_and_unique() {
+        let width = 4;
+        let n_blocks = 40;
+        let stencils: Vec<u32> = (0..500u32)
+            .flat_map(|e| {
+                (0..width as u32).map(move |k| {
+                    let b = (e * 7 + k * 13 + (e * k) % 5) % (n_blocks as u32 + 3);
+                    if b >= n_blocks as u32 {
+                        NO_DOF
+                    } else {
+                        b
+                    }
+                })
+            })
+            .collect();
+        let mut expected = Vec::new();
+        for st in stencils.chunks_exact(width) {
+            for &r in st.iter().filter(|&&r| r != NO_DOF) {
+                for &c in st.iter().filter(|&&c| c != NO_DOF) {
+                    expected.push((r, c));
+                }
+            }
+        }
+        expected.sort_unstable();
+        expected.dedup();
+        assert_eq!(block_pairs(&stencils, width, n_blocks), expected);
+    }
 
     /// Springs `½|v_a − v_b|²` between the given node pairs; the pairs may change (like contact).
     struct Springs {
