@@ -636,7 +636,9 @@ pub fn solve(
         }
         prepared = true;
         {
-            // Terms' own unknowns follow the accepted step (friction's dual variables).
+            // Terms' own unknowns follow the accepted step (friction's dual variables). An
+            // assembly the line search already made at `to` (accepted by its residual) keeps the
+            // duals of before: only its Hessian differs, the gradient is exact.
             let from = problem.state(v, &ws.x, &ws.poses);
             let to = problem.state(&ws.trial_v, &ws.trial_x, &ws.trial_poses);
             for t in terms.iter_mut() {
