@@ -158,20 +158,18 @@ impl FrictionElement {
         let eps = self.eps_m;
         let y = self.slip_norm(&u);
         let ml = self.mu_lambda;
-        let (f0, f1) = if y < eps {
-            (
-                -y * y * y / (3.0 * eps * eps) + y * y / eps + eps / 3.0,
-                y * (2.0 * eps - y) / (eps * eps),
-            )
+        let f0 = if y < eps {
+            -y * y * y / (3.0 * eps * eps) + y * y / eps + eps / 3.0
         } else {
-            (y, 1.0)
+            y
         };
-        let gu = [ml * f1 * u[0] / y, ml * f1 * u[1] / y];
+        // The gradient μλ f₁ û is μλ u/φ, and μλ/φ also scales the Hessian.
         let (phi, dphi) = self.phi(y);
+        let c = ml / phi;
+        let gu = [c * u[0], c * u[1]];
         let unit = [u[0] / y, u[1] / y];
         let w = self.dual;
         let sym = |k: usize, l: usize| 0.5 * (w[k] * unit[l] + unit[k] * w[l]);
-        let c = ml / phi;
         let hu = [
             [c * (1.0 - dphi * sym(0, 0)), -c * dphi * sym(0, 1)],
             [-c * dphi * sym(1, 0), c * (1.0 - dphi * sym(1, 1))],
