@@ -12,12 +12,17 @@ use std::path::PathBuf;
 #[serde(rename_all = "snake_case")]
 #[strum(serialize_all = "snake_case")]
 pub enum LinearSolver {
-    /// Block-Jacobi preconditioned conjugate gradients (scales to large systems).
+    /// Block-Jacobi preconditioned conjugate gradients (cheapest per iteration; the iteration
+    /// count grows with the mesh's resolution).
     Pcg,
-    /// Sparse Cholesky (pays below about 25k DOFs on 2 cores): one factorisation at each step's
-    /// first Newton iteration (the symbolic analysis reused while the pattern is unchanged); the
-    /// step's later iterations solve by CG preconditioned with it, refactorising when CG needs
-    /// more than 25 iterations.
+    /// Conjugate gradients preconditioned by smoothed-aggregation algebraic multigrid (one
+    /// V-cycle, rebuilt for every solve): iteration counts nearly independent of resolution, for
+    /// large meshes (a 256² cloth: 466 → ~20 CG iterations per Newton iteration).
+    Amg,
+    /// Sparse Cholesky (pays below about 25k DOFs, and in contact-dense scenes): a factorisation
+    /// per Newton iteration (the symbolic analysis reused while the pattern is unchanged); once
+    /// the residual fell a hundredfold in a step, CG preconditioned with the step's last factor,
+    /// refactorising when CG needs more than 8 iterations.
     Cholesky,
 }
 
@@ -48,7 +53,8 @@ crate::params::documented_struct! {
         pub step_tolerance_m_s: f64,
         /// Newton iterations before the step counts as failed and dt is halved (default: 100).
         pub max_iterations: usize,
-        /// Linear solver: `pcg` (block-Jacobi preconditioned CG) or `cholesky` (default: `pcg`).
+        /// Linear solver: `pcg` (block-Jacobi preconditioned CG), `amg` (CG preconditioned by
+        /// algebraic multigrid) or `cholesky` (default: `pcg`).
         pub linear_solver: LinearSolver,
         /// Largest number of CG iterations per solve (default: 10000).
         pub cg_max_iterations: usize,

@@ -95,8 +95,9 @@ class NewtonSettings:
     (default: 0). The original Stark uses 1e-3 and its scenes rely on it."""
     max_iterations: int
     """Newton iterations before the step counts as failed and dt is halved (default: 100)."""
-    linear_solver: Literal["pcg", "cholesky"]
-    """Linear solver: `pcg` (block-Jacobi preconditioned CG) or `cholesky` (default: `pcg`)."""
+    linear_solver: Literal["pcg", "amg", "cholesky"]
+    """Linear solver: `pcg` (block-Jacobi preconditioned CG), `amg` (CG preconditioned by
+    algebraic multigrid) or `cholesky` (default: `pcg`)."""
     cg_max_iterations: int
     """Largest number of CG iterations per solve (default: 10000)."""
     cg_relative_tolerance: float
@@ -119,7 +120,7 @@ class NewtonSettings:
     exact Hessians throughout, the barriers' definite form and then projection on demand.
     (Named `majorizer_far_from_solution` before friction's Hessian became primal–dual;
     the old name is still read.)"""
-    def __new__(cls, *, residual_tolerance_n: float = ..., step_tolerance_m_s: float = ..., max_iterations: int = ..., linear_solver: Literal["pcg", "cholesky"] = ..., cg_max_iterations: int = ..., cg_relative_tolerance: float = ..., armijo: float = ..., max_line_search_iterations: int = ..., projection: Literal["always", "on_demand"] = ..., definite_far_from_solution: bool = ...) -> NewtonSettings:
+    def __new__(cls, *, residual_tolerance_n: float = ..., step_tolerance_m_s: float = ..., max_iterations: int = ..., linear_solver: Literal["pcg", "amg", "cholesky"] = ..., cg_max_iterations: int = ..., cg_relative_tolerance: float = ..., armijo: float = ..., max_line_search_iterations: int = ..., projection: Literal["always", "on_demand"] = ..., definite_far_from_solution: bool = ...) -> NewtonSettings:
         """Defaults of the library, with the given fields replaced."""
     def to_dict(self) -> dict[str, Any]:
         """The fields as a plain dict (nested settings as nested dicts)."""

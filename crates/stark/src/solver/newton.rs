@@ -5,6 +5,7 @@
 //! then line search: the largest step the terms allow (CCD), halved until the Armijo condition
 //! holds. The initial guess is the previous velocity, shortened to the largest valid fraction.
 
+use super::linear::amg::Amg;
 use super::linear::block_sparse::{dot, norm_inf};
 use super::linear::cholesky::CholeskySolver;
 use super::linear::pcg;
@@ -123,6 +124,9 @@ pub struct NewtonWorkspace {
     /// Assembly layout and the global Hessian.
     pub assembler: Assembler,
     cholesky: CholeskySolver,
+    /// The step's multigrid hierarchy (`LinearSolver::Amg`), built at its first solve, and the
+    /// CG iterations it needed then.
+    amg: Option<(Amg, usize)>,
     gradient: Vec<f64>,
     rhs: Vec<f64>,
     step: Vec<f64>,
@@ -255,6 +259,10 @@ const REUSE_MAX_CG: usize = 8;
 /// before, the Hessian still moves too much (on a folded towel under the robot, 10 steps: 20 of
 /// 21 attempts above it failed after 8 CG iterations each, 28 of 31 below it succeeded).
 const REUSE_BELOW_RELATIVE_RESIDUAL: f64 = 1e-2;
+
+/// CG iterations a kept multigrid hierarchy is always allowed (beyond twice what it needed
+/// fresh).
+const AMG_KEPT_MIN_CG: usize = 20;
 
 /// Solve one step: on success `v` holds the end-of-step velocities.
 pub fn solve(
@@ -471,7 +479,54 @@ pub fn solve(
                 let g_norm = dot(&ws.gradient, &ws.gradient).sqrt();
                 let eta = settings.cg_relative_tolerance.min((residual / r0).sqrt());
                 let tol = (eta * g_norm).max(0.1 * settings.residual_tolerance_n * dt);
-                let info = pcg::solve(matrix, &ws.rhs, &mut ws.step, tol, settings.cg_max_iterations);
+                let info = if settings.linear_solver == LinearSolver::Amg {
+                    // The hierarchy of the step's first Hessian serves its later ones (its finest
+                    // smoother follows the matrix), while CG needs at most twice the iterations
+                    // it needed fresh; otherwise a new one. Every step builds its own, so a
+                    // resumed run is the same run.
+                    let mut fresh = iteration == 0 || ws.amg.as_ref().is_none_or(|(amg, _)| !amg.fits(matrix));
+                    loop {
+                        let t_build = Instant::now();
+                        if fresh {
+                            ws.amg = Some((Amg::new(matrix), 0));
+                        }
+                        let (amg, fresh_cg) = ws.amg.as_mut().expect("hierarchy built");
+                        if !fresh {
+                            amg.refresh_finest(matrix);
+                        }
+                        let build_s = t_build.elapsed().as_secs_f64();
+                        let t_cg = Instant::now();
+                        let max_cg = if fresh {
+                            settings.cg_max_iterations
+                        } else {
+                            settings.cg_max_iterations.min((2 * *fresh_cg).max(AMG_KEPT_MIN_CG))
+                        };
+                        let info =
+                            pcg::solve_preconditioned(matrix, &ws.rhs, &mut ws.step, tol, max_cg, &mut |r, z| {
+                                amg.precondition(matrix, r, z)
+                            });
+                        if fresh {
+                            *fresh_cg = info.iterations;
+                        }
+                        if trace {
+                            eprintln!(
+                                "  amg ({} hierarchy, levels {:?}, {build_s:.4} s): {} CG iterations in {:.4} s",
+                                if fresh { "new" } else { "kept" },
+                                amg.shape(matrix).blocks,
+                                info.iterations,
+                                t_cg.elapsed().as_secs_f64()
+                            );
+                        }
+                        // Negative curvature is the matrix's, whatever the preconditioner.
+                        if info.converged || info.indefinite || fresh {
+                            break info;
+                        }
+                        report.cg_iterations += info.iterations;
+                        fresh = true;
+                    }
+                } else {
+                    pcg::solve(matrix, &ws.rhs, &mut ws.step, tol, settings.cg_max_iterations)
+                };
                 report.cg_iterations += info.iterations;
                 indefinite = info.indefinite;
             }

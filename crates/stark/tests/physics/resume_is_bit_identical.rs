@@ -11,7 +11,8 @@
 //!   the hardened stiffnesses must come back;
 //! - `twisting_cloth_no_contact.toml` (8×8 cloth): prescribed edges turned by time events;
 //! - `rb_box_on_cloth.toml` again with the sparse Cholesky solver, whose factorisation each step
-//!   reuses as a preconditioner.
+//!   reuses as a preconditioner, and with the multigrid preconditioner, whose hierarchy each step
+//!   reuses.
 //!
 //! Then the errors: a checkpoint restored into another scene, a truncated file and another
 //! format version are refused with messages saying so.
@@ -153,6 +154,23 @@ fn cholesky_with_factor_reuse_resumes_bit_identically() {
     let s = whole.summary();
     assert!(s.max_active_pairs > 0, "the box must touch the cloth");
     // The reuse path ran: CG iterations preconditioned by the step's factor.
+    assert!(s.cg_iterations > 0 && s.newton_iterations > s.steps, "{s:?}");
+}
+
+/// The multigrid preconditioner keeps each step's hierarchy for the step's later Newton
+/// iterations: every step builds its own, so a resumed run is the same run. (A 24² cloth: a
+/// hierarchy of two levels.)
+#[test]
+fn multigrid_with_hierarchy_reuse_resumes_bit_identically() {
+    let (whole, _) = check_resume(
+        "rb_box_on_cloth.toml",
+        &[
+            "surface.cloth.grid.quads=[24, 24]",
+            "settings.newton.linear_solver=\"amg\"",
+        ],
+    );
+    let s = whole.summary();
+    assert!(s.max_active_pairs > 0, "the box must touch the cloth");
     assert!(s.cg_iterations > 0 && s.newton_iterations > s.steps, "{s:?}");
 }
 

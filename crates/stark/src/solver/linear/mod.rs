@@ -3,6 +3,7 @@
 // The matrix type lives in energy (assembly fills it; energy sits below solver);
 // re-exported here so `solver::linear::block_sparse` keeps working.
 pub use crate::energy::block_sparse;
+pub mod amg;
 pub mod cholesky;
 pub mod pcg;
 

@@ -1,0 +1,916 @@
+//! Smoothed-aggregation algebraic multigrid (Vaněk, Mandel & Brezina 1996) as CG's
+//! preconditioner on the 3×3-block Hessian (`LinearSolver::Amg`).
+//!
+//! Block-Jacobi CG needs more iterations the finer the mesh (a cloth's: 35 per Newton iteration at
+//! 32², 466 at 256²): it only relaxes errors a few elements long, and the long smooth ones take
+//! a number of iterations that grows with the node count along the cloth. Multigrid relaxes each
+//! wavelength on a grid of its own size: nodes strongly coupled through the matrix are grouped
+//! into aggregates of a node and its neighbours, each aggregate moves as one (the near-null space
+//! kept is the three translations, so every coarse unknown is again a 3-vector), the piecewise
+//! constant interpolation is smoothed by one damped Jacobi step (interpolation that bends with
+//! the elements), and the coarse matrix is the Galerkin product `Pᵀ A P`, recursively until a
+//! dense Cholesky takes the last few hundred unknowns. One V-cycle with Chebyshev smoothing
+//! (a fixed polynomial in `D⁻¹A`: symmetric, parallel, no ordering) is the preconditioner.
+//!
+//! Where it stands (BENCHMARKS.md, "Algebraic multigrid"): on a membrane-like grid CG's iteration
+//! count stays flat under refinement (13–14 from 16² to 128², block Jacobi 142 → 1045); on the
+//! hanging cloths it cuts CG iterations 4–11× but not the time, and at 256² it grows once the
+//! cloth wrinkles (100–200 per Newton iteration), where bending dominates and translations alone
+//! do not span the aggregates' low-energy motions. The next step is the rotations in the
+//! near-null space (six coarse unknowns per aggregate, from the node positions).
+//!
+//! Everything is built from the matrix alone (rigid-body blocks included: they join aggregates
+//! where the coupling is strong, and are left to the smoother where it is weak), deterministic
+//! and independent of the thread count (rows are computed independently).
+
+use super::block_sparse::{dot, Block, BlockSparseMatrix, ROWS_PER_TASK};
+use super::pcg::block_jacobi;
+use nalgebra::DMatrix;
+use rayon::prelude::*;
+
+/// Blocks `i ≠ j` are strongly coupled when `‖A_ij‖ ≥ θ √(‖A_ii‖ ‖A_jj‖)` (Frobenius norms): the
+/// classical threshold of smoothed aggregation for elasticity.
+const STRENGTH_THRESHOLD: f64 = 0.08;
+/// A level with at most this many blocks is solved directly (dense Cholesky of ≤ 600 unknowns:
+/// ~7 M multiply-adds, once per solve).
+const COARSEST_BLOCKS: usize = 200;
+/// Levels at most (a coarsening that stalls stops earlier).
+const MAX_LEVELS: usize = 16;
+/// Degree of the Chebyshev smoothing polynomial (matrix products per sweep). One (a damped
+/// block-Jacobi sweep) costs least per CG iteration: on a 128² cloth, 12 CG iterations per Newton
+/// iteration at 2.6–3.6 ms each against degree two's 8 at 5.6–6.9 ms.
+const CHEBYSHEV_DEGREE: usize = 1;
+/// The Chebyshev polynomial damps the eigenvalues of `D⁻¹A` in `[λ_max / ratio, λ_max]`; the
+/// smaller ones are the coarse levels' to reduce.
+const CHEBYSHEV_EIGEN_RATIO: f64 = 30.0;
+/// Power iterations estimating `λ_max(D⁻¹A)` per level.
+const POWER_ITERATIONS: usize = 12;
+/// Power iterations when the finest level's smoother is refitted to a later Hessian, from the
+/// top eigenvector of the last.
+const REFRESH_POWER_ITERATIONS: usize = 4;
+/// The estimate is from below: the smoother's interval and the prolongator's damping use it
+/// enlarged by this factor.
+const SPECTRAL_SAFETY: f64 = 1.1;
+
+/// `a b` of two row-major 3×3 blocks.
+#[inline]
+fn mul(a: &Block, b: &Block) -> Block {
+    let mut c = [0.0; 9];
+    for i in 0..3 {
+        for j in 0..3 {
+            c[3 * i + j] = a[3 * i] * b[j] + a[3 * i + 1] * b[3 + j] + a[3 * i + 2] * b[6 + j];
+        }
+    }
+    c
+}
+
+/// `aᵀ`.
+#[inline]
+fn transpose(a: &Block) -> Block {
+    [a[0], a[3], a[6], a[1], a[4], a[7], a[2], a[5], a[8]]
+}
+
+#[inline]
+fn add_scaled(acc: &mut Block, s: f64, b: &Block) {
+    for (x, y) in acc.iter_mut().zip(b) {
+        *x += s * y;
+    }
+}
+
+#[inline]
+fn frobenius(a: &Block) -> f64 {
+    a.iter().map(|x| x * x).sum::<f64>().sqrt()
+}
+
+#[inline]
+fn apply(b: &Block, x: &[f64]) -> [f64; 3] {
+    [
+        b[0] * x[0] + b[1] * x[1] + b[2] * x[2],
+        b[3] * x[0] + b[4] * x[1] + b[5] * x[2],
+        b[6] * x[0] + b[7] * x[1] + b[8] * x[2],
+    ]
+}
+
+/// `r = b − A x`, one pass over the rows.
+fn residual_into(a: &BlockSparseMatrix, x: &[f64], b: &[f64], r: &mut [f64]) {
+    r.par_chunks_mut(3 * ROWS_PER_TASK).enumerate().for_each(|(chunk, rs)| {
+        let first = chunk * ROWS_PER_TASK;
+        for (k, rr) in rs.chunks_exact_mut(3).enumerate() {
+            let row = first + k;
+            let mut acc = [b[3 * row], b[3 * row + 1], b[3 * row + 2]];
+            for idx in a.row_start[row]..a.row_start[row + 1] {
+                let c = a.cols[idx] as usize;
+                let p = apply(&a.values[idx], &x[3 * c..3 * c + 3]);
+                acc[0] -= p[0];
+                acc[1] -= p[1];
+                acc[2] -= p[2];
+            }
+            rr.copy_from_slice(&acc);
+        }
+    });
+}
+
+/// A rectangular matrix of 3×3 blocks, rows compressed (the prolongator and its transpose).
+#[derive(Clone, Debug, Default)]
+struct BlockRows {
+    n_cols: usize,
+    row_start: Vec<usize>,
+    cols: Vec<u32>,
+    values: Vec<Block>,
+}
+
+impl BlockRows {
+    fn n_rows(&self) -> usize {
+        self.row_start.len() - 1
+    }
+
+    fn row(&self, r: usize) -> impl Iterator<Item = (usize, &Block)> {
+        let span = self.row_start[r]..self.row_start[r + 1];
+        self.cols[span.clone()]
+            .iter()
+            .map(|&c| c as usize)
+            .zip(&self.values[span])
+    }
+
+    /// Rows computed independently by `row(r, out)` (sorted, unique columns appended to `out`),
+    /// in parallel over fixed chunks and concatenated in order.
+    fn from_rows(n_rows: usize, n_cols: usize, row: impl Fn(usize, &mut Vec<(u32, Block)>) + Sync) -> BlockRows {
+        // Per chunk: each row's length, and the rows' entries one after the other.
+        type Chunk = (Vec<usize>, Vec<(u32, Block)>);
+        let chunks: Vec<Chunk> = (0..n_rows.div_ceil(ROWS_PER_TASK))
+            .into_par_iter()
+            .map(|chunk| {
+                let rows = chunk * ROWS_PER_TASK..((chunk + 1) * ROWS_PER_TASK).min(n_rows);
+                let mut lengths = Vec::with_capacity(rows.len());
+                let mut entries = Vec::new();
+                for r in rows {
+                    let before = entries.len();
+                    row(r, &mut entries);
+                    lengths.push(entries.len() - before);
+                }
+                (lengths, entries)
+            })
+            .collect();
+        let mut out = BlockRows {
+            n_cols,
+            row_start: Vec::with_capacity(n_rows + 1),
+            cols: Vec::new(),
+            values: Vec::new(),
+        };
+        out.row_start.push(0);
+        for (lengths, entries) in chunks {
+            for l in lengths {
+                out.row_start.push(out.row_start.last().unwrap() + l);
+            }
+            for (c, v) in entries {
+                out.cols.push(c);
+                out.values.push(v);
+            }
+        }
+        out
+    }
+
+    /// `y = M x`.
+    fn mul_vec(&self, x: &[f64], y: &mut [f64]) {
+        y.par_chunks_mut(3 * ROWS_PER_TASK).enumerate().for_each(|(chunk, ys)| {
+            for (k, yr) in ys.chunks_exact_mut(3).enumerate() {
+                let mut acc = [0.0; 3];
+                for (c, b) in self.row(chunk * ROWS_PER_TASK + k) {
+                    let p = apply(b, &x[3 * c..3 * c + 3]);
+                    acc[0] += p[0];
+                    acc[1] += p[1];
+                    acc[2] += p[2];
+                }
+                yr.copy_from_slice(&acc);
+            }
+        });
+    }
+
+    /// `Mᵀ`.
+    fn transposed(&self) -> BlockRows {
+        let mut row_start = vec![0usize; self.n_cols + 1];
+        for &c in &self.cols {
+            row_start[c as usize + 1] += 1;
+        }
+        for i in 0..self.n_cols {
+            row_start[i + 1] += row_start[i];
+        }
+        let mut next = row_start.clone();
+        let mut cols = vec![0u32; self.cols.len()];
+        let mut values = vec![[0.0; 9]; self.cols.len()];
+        // Rows visited in order: each transposed row's columns come out sorted.
+        for r in 0..self.n_rows() {
+            for (c, b) in self.row(r) {
+                cols[next[c]] = r as u32;
+                values[next[c]] = transpose(b);
+                next[c] += 1;
+            }
+        }
+        BlockRows {
+            n_cols: self.n_rows(),
+            row_start,
+            cols,
+            values,
+        }
+    }
+}
+
+/// Row `r` of `Σ_k L_rk R_k·` accumulated over a dense marker (Gustavson's product), its
+/// columns sorted.
+struct RowAccumulator {
+    slot: Vec<u32>,
+    touched: Vec<u32>,
+    sums: Vec<Block>,
+}
+
+impl RowAccumulator {
+    const EMPTY: u32 = u32::MAX;
+
+    fn new(n_cols: usize) -> Self {
+        Self {
+            slot: vec![Self::EMPTY; n_cols],
+            touched: Vec::new(),
+            sums: Vec::new(),
+        }
+    }
+
+    fn add(&mut self, c: usize, s: f64, b: &Block) {
+        let k = self.slot[c];
+        if k == Self::EMPTY {
+            self.slot[c] = self.touched.len() as u32;
+            self.touched.push(c as u32);
+            let mut v = [0.0; 9];
+            add_scaled(&mut v, s, b);
+            self.sums.push(v);
+        } else {
+            add_scaled(&mut self.sums[k as usize], s, b);
+        }
+    }
+
+    /// Append the row, sorted by column, to `out` and reset.
+    fn drain_into(&mut self, out: &mut Vec<(u32, Block)>) {
+        let start = out.len();
+        for (&c, v) in self.touched.iter().zip(&self.sums) {
+            out.push((c, *v));
+            self.slot[c as usize] = Self::EMPTY;
+        }
+        out[start..].sort_unstable_by_key(|e| e.0);
+        self.touched.clear();
+        self.sums.clear();
+    }
+}
+
+/// `L R` for `L` with rows given by `left_row(r)` (columns index rows of `right`).
+fn product<'a, F, I>(n_rows: usize, right: &BlockRows, left_row: F) -> BlockRows
+where
+    F: Fn(usize) -> I + Sync,
+    I: Iterator<Item = (usize, &'a Block)>,
+{
+    let n_cols = right.n_cols;
+    BlockRows::from_rows(n_rows, n_cols, |r, out| {
+        thread_local! {
+            static ACC: std::cell::RefCell<Option<RowAccumulator>> = const { std::cell::RefCell::new(None) };
+        }
+        ACC.with(|acc| {
+            let mut acc = acc.borrow_mut();
+            if acc.as_ref().is_none_or(|a| a.slot.len() != n_cols) {
+                *acc = Some(RowAccumulator::new(n_cols));
+            }
+            let acc = acc.as_mut().expect("accumulator present");
+            for (k, l) in left_row(r) {
+                for (c, rb) in right.row(k) {
+                    acc.add(c, 1.0, &mul(l, rb));
+                }
+            }
+            acc.drain_into(out);
+        });
+    })
+}
+
+/// `λ_max(D⁻¹A)` from below, by power iteration from a fixed start (the Rayleigh quotient of the
+/// symmetric `D^{-½} A D^{-½}`, in `A`'s inner product).
+fn spectral_radius(a: &BlockSparseMatrix, inv_diag: &[Block]) -> f64 {
+    power_iteration(a, inv_diag, &mut start_vector(a.dim()), POWER_ITERATIONS)
+}
+
+/// A fixed pseudo-random start: not orthogonal to the top mode, the same every run.
+fn start_vector(n: usize) -> Vec<f64> {
+    (0..n)
+        .map(|i| {
+            let h = (i as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+            ((h >> 11) as f64 / (1u64 << 53) as f64) - 0.5
+        })
+        .collect()
+}
+
+/// `iterations` power iterations on `D⁻¹A` from `x` (left at the last iterate); the last
+/// Rayleigh quotient.
+fn power_iteration(a: &BlockSparseMatrix, inv_diag: &[Block], x: &mut [f64], iterations: usize) -> f64 {
+    let n = a.dim();
+    let mut ax = vec![0.0; n];
+    let mut y = vec![0.0; n];
+    let mut lambda = 0.0;
+    for _ in 0..iterations {
+        a.mul_vec(x, &mut ax);
+        let xax = dot(x, &ax);
+        // y = D⁻¹ A x
+        y.par_chunks_mut(3)
+            .zip(ax.par_chunks(3))
+            .zip(inv_diag.par_iter())
+            .for_each(|((y, r), m)| {
+                y.copy_from_slice(&apply(m, r));
+            });
+        let axy = dot(&ax, &y);
+        if xax <= 0.0 || !axy.is_finite() {
+            break;
+        }
+        lambda = axy / xax;
+        let norm = dot(&y, &y).sqrt();
+        if norm == 0.0 {
+            break;
+        }
+        x.par_iter_mut().zip(&y).for_each(|(x, y)| *x = y / norm);
+    }
+    lambda
+}
+
+/// Aggregates of strongly coupled blocks: `aggregate[i]` (`u32::MAX`: none, a block coupled
+/// only weakly, left to the smoother) and their number.
+fn aggregate(a: &BlockSparseMatrix) -> (Vec<u32>, usize) {
+    const NONE: u32 = u32::MAX;
+    let n = a.n_blocks;
+    let diag: Vec<f64> = (0..n).map(|r| frobenius(&a.values[a.diagonal[r]])).collect();
+    let diag = &diag;
+    let strong = |r: usize| {
+        (a.row_start[r]..a.row_start[r + 1]).filter_map(move |idx| {
+            let c = a.cols[idx] as usize;
+            (c != r && frobenius(&a.values[idx]) >= STRENGTH_THRESHOLD * (diag[r] * diag[c]).sqrt()).then_some(c)
+        })
+    };
+    let mut agg = vec![NONE; n];
+    let mut count = 0u32;
+    // 1: a block whose strong neighbours are all free seeds an aggregate with them.
+    for r in 0..n {
+        if agg[r] != NONE {
+            continue;
+        }
+        let mut any = false;
+        let mut free = true;
+        for c in strong(r) {
+            any = true;
+            free &= agg[c] == NONE;
+        }
+        if any && free {
+            agg[r] = count;
+            for c in strong(r) {
+                agg[c] = count;
+            }
+            count += 1;
+        }
+    }
+    // 2: the rest join a neighbouring aggregate of step 1.
+    let first_pass = agg.clone();
+    for r in 0..n {
+        if agg[r] == NONE {
+            if let Some(c) = strong(r).find(|&c| first_pass[c] != NONE) {
+                agg[r] = first_pass[c];
+            }
+        }
+    }
+    // 3: what is still free (strong neighbours all in new aggregates) seeds new ones.
+    for r in 0..n {
+        if agg[r] == NONE && strong(r).next().is_some() {
+            agg[r] = count;
+            for c in strong(r) {
+                if agg[c] == NONE {
+                    agg[c] = count;
+                }
+            }
+            count += 1;
+        }
+    }
+    (agg, count as usize)
+}
+
+/// One level below the finest: how to get there and back.
+struct Level {
+    /// The coarse level's matrix.
+    matrix: BlockSparseMatrix,
+    /// Prolongator from this coarse level to the one above, and its transpose (restriction).
+    prolongator: BlockRows,
+    restriction: BlockRows,
+}
+
+/// The smoother's data on one level (finest included).
+struct Smoother {
+    inv_diag: Vec<Block>,
+    lambda_max: f64,
+    degree: usize,
+}
+
+enum CoarsestSolve {
+    Cholesky(nalgebra::Cholesky<f64, nalgebra::Dyn>),
+    /// A singular coarsest matrix: its pseudo-inverse.
+    PseudoInverse(DMatrix<f64>),
+}
+
+/// A level's vectors during a cycle.
+struct Work {
+    /// Right-hand side and solution.
+    b: Vec<f64>,
+    x: Vec<f64>,
+    /// Residual, Chebyshev direction, product scratch.
+    r: Vec<f64>,
+    d: Vec<f64>,
+    t: Vec<f64>,
+}
+
+impl Work {
+    fn new(n: usize) -> Self {
+        Self {
+            b: vec![0.0; n],
+            x: vec![0.0; n],
+            r: vec![0.0; n],
+            d: vec![0.0; n],
+            t: vec![0.0; n],
+        }
+    }
+}
+
+/// The multigrid hierarchy of one matrix.
+pub struct Amg {
+    levels: Vec<Level>,
+    smoothers: Vec<Smoother>,
+    coarsest: CoarsestSolve,
+    work: Vec<Work>,
+    /// The finest level's last power iterate (its top eigenvector, nearly).
+    top: Vec<f64>,
+}
+
+/// Statistics of a hierarchy (logs and tests).
+#[derive(Clone, Debug, PartialEq)]
+pub struct AmgShape {
+    /// Blocks per level, finest first.
+    pub blocks: Vec<usize>,
+    /// Stored blocks per level.
+    pub nnz_blocks: Vec<usize>,
+}
+
+impl Amg {
+    /// Build the hierarchy of `a` (symmetric positive definite, as a Newton Hessian projected or
+    /// held definite).
+    pub fn new(a: &BlockSparseMatrix) -> Amg {
+        let mut levels: Vec<Level> = Vec::new();
+        let mut smoothers = Vec::new();
+        let mut top = Vec::new();
+        loop {
+            let fine = levels.last().map_or(a, |l| &l.matrix);
+            let inv_diag = block_jacobi(fine);
+            let lambda_max = if levels.is_empty() {
+                top = start_vector(a.dim());
+                SPECTRAL_SAFETY * power_iteration(a, &inv_diag, &mut top, POWER_ITERATIONS)
+            } else {
+                SPECTRAL_SAFETY * spectral_radius(fine, &inv_diag)
+            };
+            let done = fine.n_blocks <= COARSEST_BLOCKS || levels.len() + 1 >= MAX_LEVELS;
+            let next = if done {
+                None
+            } else {
+                let (agg, n_agg) = aggregate(fine);
+                // A coarsening that barely shrinks the level is not worth a level.
+                (n_agg > 0 && (n_agg as f64) < 0.85 * fine.n_blocks as f64)
+                    .then(|| coarsen(fine, &inv_diag, lambda_max, &agg, n_agg))
+            };
+            smoothers.push(Smoother {
+                inv_diag,
+                lambda_max,
+                degree: CHEBYSHEV_DEGREE,
+            });
+            match next {
+                Some(level) => levels.push(level),
+                None => break,
+            }
+        }
+        let coarsest = coarsest_solve(levels.last().map_or(a, |l| &l.matrix));
+        let work = std::iter::once(a.dim())
+            .chain(levels.iter().map(|l| l.matrix.dim()))
+            .map(Work::new)
+            .collect();
+        Amg {
+            levels,
+            smoothers,
+            coarsest,
+            work,
+            top,
+        }
+    }
+
+    /// The hierarchy can precondition `a`: the same number of blocks as the matrix it was built
+    /// from (the coarse levels of an earlier Hessian of the same unknowns).
+    pub fn fits(&self, a: &BlockSparseMatrix) -> bool {
+        self.work[0].b.len() == a.dim()
+    }
+
+    /// Keep the coarse levels, and fit the finest level's smoother to `a` (a later Hessian of
+    /// the same unknowns; the power iteration continues from the last one's top eigenvector).
+    pub fn refresh_finest(&mut self, a: &BlockSparseMatrix) {
+        let inv_diag = block_jacobi(a);
+        let mut lambda_max = SPECTRAL_SAFETY * power_iteration(a, &inv_diag, &mut self.top, REFRESH_POWER_ITERATIONS);
+        if lambda_max <= 0.0 || !lambda_max.is_finite() {
+            lambda_max = SPECTRAL_SAFETY * spectral_radius(a, &inv_diag);
+        }
+        self.smoothers[0] = Smoother {
+            inv_diag,
+            lambda_max,
+            degree: CHEBYSHEV_DEGREE,
+        };
+    }
+
+    /// Blocks and stored blocks per level.
+    pub fn shape(&self, a: &BlockSparseMatrix) -> AmgShape {
+        let mut blocks = vec![a.n_blocks];
+        let mut nnz_blocks = vec![a.nnz_blocks()];
+        for l in &self.levels {
+            blocks.push(l.matrix.n_blocks);
+            nnz_blocks.push(l.matrix.nnz_blocks());
+        }
+        AmgShape { blocks, nnz_blocks }
+    }
+
+    /// `z ≈ A⁻¹ r`: one V-cycle from zero. `a` is the matrix the hierarchy was built from.
+    pub fn precondition(&mut self, a: &BlockSparseMatrix, r: &[f64], z: &mut [f64]) {
+        self.work[0].b.copy_from_slice(r);
+        cycle(&self.levels, &self.smoothers, &self.coarsest, &mut self.work, a);
+        z.copy_from_slice(&self.work[0].x);
+    }
+}
+
+/// V-cycle for the right-hand side in `work[0].b` of `matrix` (the level above `levels[0]`),
+/// into `work[0].x`.
+fn cycle(
+    levels: &[Level],
+    smoothers: &[Smoother],
+    coarsest: &CoarsestSolve,
+    work: &mut [Work],
+    matrix: &BlockSparseMatrix,
+) {
+    let Some((level, coarser)) = levels.split_first() else {
+        solve_coarsest(coarsest, &work[0].b, &mut work[0].x);
+        return;
+    };
+    let (here, below) = work.split_first_mut().expect("a work set per level");
+    let Work { b, x, r, d, t } = here;
+    chebyshev(matrix, &smoothers[0], b, x, r, d, true);
+    // The residual after pre-smoothing, restricted; the coarse correction, prolongated.
+    residual_into(matrix, x, b, r);
+    level.restriction.mul_vec(r, &mut below[0].b);
+    cycle(coarser, &smoothers[1..], coarsest, below, &level.matrix);
+    level.prolongator.mul_vec(&below[0].x, t);
+    x.par_iter_mut().zip(t.par_iter()).for_each(|(x, t)| *x += t);
+    chebyshev(matrix, &smoothers[0], b, x, r, d, false);
+}
+
+/// The next coarser level from aggregates: the tentative prolongator (each aggregate's blocks
+/// move as one, `I/√size`), smoothed by one damped Jacobi step `(I − ω D⁻¹A)`, `ω = 4/(3λ_max)`,
+/// and the Galerkin product.
+fn coarsen(a: &BlockSparseMatrix, inv_diag: &[Block], lambda_max: f64, agg: &[u32], n_agg: usize) -> Level {
+    let mut size = vec![0usize; n_agg];
+    for &g in agg {
+        if g != u32::MAX {
+            size[g as usize] += 1;
+        }
+    }
+    let scale: Vec<f64> = size.iter().map(|&s| 1.0 / (s as f64).sqrt()).collect();
+    let omega = 4.0 / (3.0 * lambda_max);
+    let identity: Block = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
+    let prolongator = BlockRows::from_rows(a.n_blocks, n_agg, |r, out| {
+        // Few distinct aggregates per row: a short list merged by linear search.
+        let mut row: Vec<(u32, Block)> = Vec::new();
+        let mut add = |g: u32, s: f64, b: &Block| match row.iter_mut().find(|e| e.0 == g) {
+            Some(e) => add_scaled(&mut e.1, s, b),
+            None => {
+                let mut v = [0.0; 9];
+                add_scaled(&mut v, s, b);
+                row.push((g, v));
+            }
+        };
+        if agg[r] != u32::MAX {
+            add(agg[r], scale[agg[r] as usize], &identity);
+        }
+        for idx in a.row_start[r]..a.row_start[r + 1] {
+            let g = agg[a.cols[idx] as usize];
+            if g != u32::MAX {
+                add(g, -omega * scale[g as usize], &mul(&inv_diag[r], &a.values[idx]));
+            }
+        }
+        row.sort_unstable_by_key(|e| e.0);
+        out.extend(row);
+    });
+    let restriction = prolongator.transposed();
+    // A P, then Pᵀ (A P).
+    let ap = product(a.n_blocks, &prolongator, |r| {
+        (a.row_start[r]..a.row_start[r + 1]).map(|idx| (a.cols[idx] as usize, &a.values[idx]))
+    });
+    let coarse = product(n_agg, &ap, |r| restriction.row(r));
+    let mut matrix = BlockSparseMatrix {
+        n_blocks: n_agg,
+        diagonal: Vec::with_capacity(n_agg),
+        row_start: coarse.row_start,
+        cols: coarse.cols,
+        values: coarse.values,
+    };
+    for r in 0..n_agg {
+        let span = matrix.row_start[r]..matrix.row_start[r + 1];
+        // Every aggregate has a block: P's column is nonzero there, and so is the diagonal of PᵀAP.
+        let k = matrix.cols[span.clone()]
+            .binary_search(&(r as u32))
+            .expect("the coarse matrix has its diagonal");
+        matrix.diagonal.push(span.start + k);
+    }
+    Level {
+        matrix,
+        prolongator,
+        restriction,
+    }
+}
+
+fn coarsest_solve(a: &BlockSparseMatrix) -> CoarsestSolve {
+    let n = a.dim();
+    let dense = DMatrix::from_fn(n, n, |i, j| {
+        a.find((i / 3) as u32, (j / 3) as u32)
+            .map_or(0.0, |idx| a.values[idx][3 * (i % 3) + j % 3])
+    });
+    let symmetric = (&dense + dense.transpose()) * 0.5;
+    match symmetric.clone().cholesky() {
+        Some(c) => CoarsestSolve::Cholesky(c),
+        None => {
+            let eigen = symmetric.symmetric_eigen();
+            let largest = eigen.eigenvalues.iter().fold(0.0f64, |m, &l| m.max(l.abs()));
+            let inverse = eigen
+                .eigenvalues
+                .map(|l| if l > 1e-12 * largest { 1.0 / l } else { 0.0 });
+            let v = &eigen.eigenvectors;
+            CoarsestSolve::PseudoInverse(v * DMatrix::from_diagonal(&inverse) * v.transpose())
+        }
+    }
+}
+
+fn solve_coarsest(solve: &CoarsestSolve, b: &[f64], x: &mut [f64]) {
+    let rhs = nalgebra::DVector::from_column_slice(b);
+    let sol = match solve {
+        CoarsestSolve::Cholesky(c) => c.solve(&rhs),
+        CoarsestSolve::PseudoInverse(p) => p * rhs,
+    };
+    x.copy_from_slice(sol.as_slice());
+}
+
+/// Chebyshev smoothing of `A x = b` on `[λ_max/ratio, λ_max]` of `D⁻¹A` (Adams, Brezina, Hu &
+/// Tuminaro 2003), `smoother.degree` products (degree one: a block-Jacobi sweep damped by
+/// `1/θ`). `x_is_zero`: start from zero (`x` is
+/// overwritten), otherwise from `x`.
+fn chebyshev(
+    a: &BlockSparseMatrix,
+    smoother: &Smoother,
+    b: &[f64],
+    x: &mut [f64],
+    r: &mut [f64],
+    d: &mut [f64],
+    x_is_zero: bool,
+) {
+    let upper = smoother.lambda_max;
+    if upper <= 0.0 || !upper.is_finite() {
+        if x_is_zero {
+            x.iter_mut().for_each(|v| *v = 0.0);
+        }
+        return;
+    }
+    let lower = upper / CHEBYSHEV_EIGEN_RATIO;
+    let theta = 0.5 * (upper + lower);
+    let delta = 0.5 * (upper - lower);
+    let sigma = theta / delta;
+    let mut rho = 1.0 / sigma;
+    let inv = &smoother.inv_diag;
+    let rows = 3 * ROWS_PER_TASK;
+    // d = D⁻¹ r / θ, x += d (r = b from zero).
+    let first = |x: &mut [f64], d: &mut [f64], r: &[f64]| {
+        x.par_chunks_mut(rows)
+            .zip(d.par_chunks_mut(rows))
+            .zip(r.par_chunks(rows))
+            .zip(inv.par_chunks(ROWS_PER_TASK))
+            .for_each(|(((xs, ds), rs), ms)| {
+                for (((x, d), r), m) in xs
+                    .chunks_exact_mut(3)
+                    .zip(ds.chunks_exact_mut(3))
+                    .zip(rs.chunks_exact(3))
+                    .zip(ms)
+                {
+                    let z = apply(m, r);
+                    for i in 0..3 {
+                        d[i] = z[i] / theta;
+                        x[i] = if x_is_zero { d[i] } else { x[i] + d[i] };
+                    }
+                }
+            });
+    };
+    if x_is_zero {
+        first(x, d, b);
+        if smoother.degree > 1 {
+            r.copy_from_slice(b);
+        }
+    } else {
+        residual_into(a, x, b, r);
+        first(x, d, r);
+    }
+    for _ in 1..smoother.degree {
+        // r −= A d (r = b − A x), then the next direction.
+        r.par_chunks_mut(rows).enumerate().for_each(|(chunk, rs)| {
+            let row0 = chunk * ROWS_PER_TASK;
+            for (k, rr) in rs.chunks_exact_mut(3).enumerate() {
+                let row = row0 + k;
+                for idx in a.row_start[row]..a.row_start[row + 1] {
+                    let c = a.cols[idx] as usize;
+                    let p = apply(&a.values[idx], &d[3 * c..3 * c + 3]);
+                    rr[0] -= p[0];
+                    rr[1] -= p[1];
+                    rr[2] -= p[2];
+                }
+            }
+        });
+        let rho_next = 1.0 / (2.0 * sigma - rho);
+        let keep = rho_next * rho;
+        let push = 2.0 * rho_next / delta;
+        x.par_chunks_mut(rows)
+            .zip(d.par_chunks_mut(rows))
+            .zip(r.par_chunks(rows))
+            .zip(inv.par_chunks(ROWS_PER_TASK))
+            .for_each(|(((xs, ds), rs), ms)| {
+                for (((x, d), r), m) in xs
+                    .chunks_exact_mut(3)
+                    .zip(ds.chunks_exact_mut(3))
+                    .zip(rs.chunks_exact(3))
+                    .zip(ms)
+                {
+                    let z = apply(m, r);
+                    for i in 0..3 {
+                        d[i] = keep * d[i] + push * z[i];
+                        x[i] += d[i];
+                    }
+                }
+            });
+        rho = rho_next;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::pcg;
+    use super::*;
+
+    /// A cloth-like `m × m` grid of 3-vectors: per edge, a spring block `k (I + ½ e eᵀ)` of an
+    /// anisotropic stiffness (the coupling along the edge direction `e` is stronger), plus a small
+    /// mass on the diagonal, one corner pinned by a stiff diagonal.
+    fn grid(m: usize, stiffness: f64, mass: f64) -> BlockSparseMatrix {
+        let n = m * m;
+        let id = |i: usize, j: usize| (i * m + j) as u32;
+        let mut edges = Vec::new();
+        for i in 0..m {
+            for j in 0..m {
+                if i + 1 < m {
+                    edges.push((id(i, j), id(i + 1, j), 0));
+                }
+                if j + 1 < m {
+                    edges.push((id(i, j), id(i, j + 1), 1));
+                }
+            }
+        }
+        let mut pairs: Vec<(u32, u32)> = (0..n as u32).map(|i| (i, i)).collect();
+        for &(a, b, _) in &edges {
+            pairs.push((a, b));
+            pairs.push((b, a));
+        }
+        pairs.sort_unstable();
+        let mut a = BlockSparseMatrix::from_sorted_pairs(n, &pairs);
+        for r in 0..n {
+            let d = a.diagonal[r];
+            a.values[d] = [mass, 0.0, 0.0, 0.0, mass, 0.0, 0.0, 0.0, mass];
+        }
+        a.values[a.diagonal[0]][0] += 1e3 * stiffness;
+        a.values[a.diagonal[0]][4] += 1e3 * stiffness;
+        a.values[a.diagonal[0]][8] += 1e3 * stiffness;
+        for &(p, q, axis) in &edges {
+            let mut k = [stiffness, 0.0, 0.0, 0.0, stiffness, 0.0, 0.0, 0.0, stiffness];
+            k[4 * axis] += 0.5 * stiffness;
+            for (r, c, s) in [(p, p, 1.0), (q, q, 1.0), (p, q, -1.0), (q, p, -1.0)] {
+                let idx = a.find(r, c).unwrap();
+                add_scaled(&mut a.values[idx], s, &k);
+            }
+        }
+        a
+    }
+
+    fn rhs(n: usize) -> Vec<f64> {
+        (0..n).map(|i| ((i * 37) % 101) as f64 / 50.0 - 1.0).collect()
+    }
+
+    fn residual(a: &BlockSparseMatrix, x: &[f64], b: &[f64]) -> f64 {
+        let mut ax = vec![0.0; b.len()];
+        a.mul_vec(x, &mut ax);
+        ax.iter().zip(b).map(|(p, q)| (p - q).powi(2)).sum::<f64>().sqrt()
+    }
+
+    #[test]
+    fn the_galerkin_matrix_is_pt_a_p() {
+        let a = grid(24, 1.0, 1e-3);
+        let (agg, n_agg) = aggregate(&a);
+        assert!(
+            n_agg > 0 && n_agg < a.n_blocks / 3,
+            "{n_agg} aggregates of {}",
+            a.n_blocks
+        );
+        let inv = block_jacobi(&a);
+        let lambda = SPECTRAL_SAFETY * spectral_radius(&a, &inv);
+        let level = coarsen(&a, &inv, lambda, &agg, n_agg);
+        // Pᵀ A P x against the coarse product, for a random coarse x.
+        let xc = rhs(3 * n_agg);
+        let mut px = vec![0.0; a.dim()];
+        level.prolongator.mul_vec(&xc, &mut px);
+        let mut apx = vec![0.0; a.dim()];
+        a.mul_vec(&px, &mut apx);
+        let mut expected = vec![0.0; 3 * n_agg];
+        level.restriction.mul_vec(&apx, &mut expected);
+        let mut got = vec![0.0; 3 * n_agg];
+        level.matrix.mul_vec(&xc, &mut got);
+        let scale = expected.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        for (e, g) in expected.iter().zip(&got) {
+            assert!((e - g).abs() <= 1e-12 * scale, "{e} vs {g}");
+        }
+        // Symmetric, as A is.
+        let dense = level.matrix.to_dense();
+        for i in 0..dense.len() {
+            for j in 0..dense.len() {
+                assert!((dense[i][j] - dense[j][i]).abs() <= 1e-12 * scale);
+            }
+        }
+    }
+
+    #[test]
+    fn the_spectral_radius_is_estimated_from_below_and_close() {
+        let a = grid(16, 1.0, 1e-2);
+        let inv = block_jacobi(&a);
+        let estimate = spectral_radius(&a, &inv);
+        // Dense D^{-½} A D^{-½}: the exact largest eigenvalue.
+        let n = a.dim();
+        let dense = a.to_dense();
+        let scaled = DMatrix::from_fn(n, n, |i, j| dense[i][j] / (dense[i][i] * dense[j][j]).sqrt());
+        let exact = scaled.symmetric_eigenvalues().max();
+        assert!(
+            estimate <= exact * (1.0 + 1e-9) && estimate >= 0.9 * exact,
+            "{estimate} vs {exact}"
+        );
+    }
+
+    /// The point of it: CG's iteration count nearly flat under refinement, where block Jacobi's
+    /// grows like the grid's side.
+    #[test]
+    fn cg_iterations_stay_flat_under_refinement() {
+        let mut counts = Vec::new();
+        for m in [16, 32, 64, 128] {
+            let a = grid(m, 1.0, 1e-4);
+            let b = rhs(a.dim());
+            let tol = 1e-8 * dot(&b, &b).sqrt();
+            let mut amg = Amg::new(&a);
+            let mut x = vec![0.0; a.dim()];
+            let with = pcg::solve_preconditioned(&a, &b, &mut x, tol, 1000, &mut |r, z| amg.precondition(&a, r, z));
+            assert!(with.converged && !with.indefinite, "{m}: {with:?}");
+            assert!(residual(&a, &x, &b) <= 1.01 * tol);
+            let without = pcg::solve(&a, &b, &mut x, tol, 10_000);
+            assert!(without.converged);
+            counts.push((m, with.iterations, without.iterations, amg.shape(&a).blocks));
+        }
+        eprintln!("{counts:?}");
+        let (first, last) = (counts[0].1, counts[counts.len() - 1].1);
+        // Eight times the side: block Jacobi about eight times the iterations, multigrid < 2×.
+        assert!(last <= 2 * first, "{counts:?}");
+        assert!(counts[counts.len() - 1].2 >= 4 * last, "{counts:?}");
+    }
+
+    #[test]
+    fn the_hierarchy_is_deterministic_and_the_preconditioner_symmetric() {
+        let a = grid(40, 1.0, 1e-3);
+        let mut one = Amg::new(&a);
+        let mut two = Amg::new(&a);
+        let (u, w) = (
+            rhs(a.dim()),
+            (0..a.dim()).map(|i| (i as f64 * 0.37).sin()).collect::<Vec<_>>(),
+        );
+        let (mut mu, mut mw, mut mu2) = (vec![0.0; a.dim()], vec![0.0; a.dim()], vec![0.0; a.dim()]);
+        one.precondition(&a, &u, &mut mu);
+        two.precondition(&a, &u, &mut mu2);
+        assert_eq!(mu, mu2);
+        one.precondition(&a, &w, &mut mw);
+        // wᵀ M u = uᵀ M w, and positive.
+        let (wmu, umw) = (dot(&w, &mu), dot(&u, &mw));
+        assert!((wmu - umw).abs() <= 1e-10 * wmu.abs().max(umw.abs()), "{wmu} vs {umw}");
+        assert!(dot(&u, &mu) > 0.0);
+    }
+}
