@@ -16,8 +16,10 @@ pub enum LinearSolver {
     /// count grows with the mesh's resolution).
     Pcg,
     /// Conjugate gradients preconditioned by smoothed-aggregation algebraic multigrid (one
-    /// V-cycle, rebuilt for every solve): iteration counts nearly independent of resolution, for
-    /// large meshes (a 256² cloth: 466 → ~20 CG iterations per Newton iteration).
+    /// V-cycle; the near-null space the rigid motions of the unknowns; one hierarchy per step):
+    /// iteration counts nearly independent of resolution, for large meshes (a 256² cloth, 200k
+    /// unknowns: 13 CG iterations per Newton iteration instead of 466, 2.3× faster; below ~100k
+    /// unknowns block-Jacobi CG is faster).
     Amg,
     /// Sparse Cholesky (pays below about 25k DOFs, and in contact-dense scenes): a factorisation
     /// per Newton iteration (the symbolic analysis reused while the pattern is unchanged); once

@@ -5,7 +5,7 @@
 //! then line search: the largest step the terms allow (CCD), halved until the Armijo condition
 //! holds. The initial guess is the previous velocity, shortened to the largest valid fraction.
 
-use super::linear::amg::Amg;
+use super::linear::amg::{Amg, BlockMotion, NearNullSpace};
 use super::linear::block_sparse::{dot, norm_inf};
 use super::linear::cholesky::CholeskySolver;
 use super::linear::pcg;
@@ -488,7 +488,25 @@ pub fn solve(
                     loop {
                         let t_build = Instant::now();
                         if fresh {
-                            ws.amg = Some((Amg::new(matrix), 0));
+                            // The near-null space: the rigid motions of the unknowns at the
+                            // iterate's positions (nodes, bodies' centres of mass and spins).
+                            let n_nodes = problem.nodes.len();
+                            let motions: Vec<BlockMotion> = dofs
+                                .block_of_dof
+                                .iter()
+                                .map(|&b| {
+                                    let b = b as usize;
+                                    if b < n_nodes {
+                                        BlockMotion::Point(ws.x[b].into())
+                                    } else if (b - n_nodes).is_multiple_of(2) {
+                                        BlockMotion::Point(ws.poses[(b - n_nodes) / 2].t.into())
+                                    } else {
+                                        BlockMotion::Angular
+                                    }
+                                })
+                                .collect();
+                            let space = NearNullSpace::rigid_motions(&motions);
+                            ws.amg = Some((Amg::with_near_null_space(matrix, space), 0));
                         }
                         let (amg, fresh_cg) = ws.amg.as_mut().expect("hierarchy built");
                         if !fresh {

@@ -5,23 +5,24 @@
 //! 32², 466 at 256²): it only relaxes errors a few elements long, and the long smooth ones take
 //! a number of iterations that grows with the node count along the cloth. Multigrid relaxes each
 //! wavelength on a grid of its own size: nodes strongly coupled through the matrix are grouped
-//! into aggregates of a node and its neighbours, each aggregate moves as one (the near-null space
-//! kept is the three translations, so every coarse unknown is again a 3-vector), the piecewise
-//! constant interpolation is smoothed by one damped Jacobi step (interpolation that bends with
+//! into aggregates of a node and its neighbours; each aggregate moves by the near-null space's
+//! modes (the motions that cost no elastic energy: the three translations, and for shells the
+//! three rotations too, whose local versions are bending's low-energy motions), orthonormalised
+//! per aggregate, so that every coarse unknown is again a 3-block (a translation or a rotation
+//! of an aggregate); this interpolation is smoothed by one damped Jacobi step (it then bends with
 //! the elements), and the coarse matrix is the Galerkin product `Pᵀ A P`, recursively until a
-//! dense Cholesky takes the last few hundred unknowns. One V-cycle with Chebyshev smoothing
-//! (a fixed polynomial in `D⁻¹A`: symmetric, parallel, no ordering) is the preconditioner.
+//! dense Cholesky takes the last few hundred unknowns. One V-cycle with Chebyshev smoothing (a
+//! fixed polynomial in `D⁻¹A`: symmetric, parallel, no ordering) is the preconditioner.
 //!
-//! Where it stands (BENCHMARKS.md, "Algebraic multigrid"): on a membrane-like grid CG's iteration
-//! count stays flat under refinement (13–14 from 16² to 128², block Jacobi 142 → 1045); on the
-//! hanging cloths it cuts CG iterations 4–11× but not the time, and at 256² it grows once the
-//! cloth wrinkles (100–200 per Newton iteration), where bending dominates and translations alone
-//! do not span the aggregates' low-energy motions. The next step is the rotations in the
-//! near-null space (six coarse unknowns per aggregate, from the node positions).
+//! Where it stands (BENCHMARKS.md, "Algebraic multigrid"): CG's iteration count stays nearly flat
+//! under refinement (a membrane-like grid: 13–14 from 16² to 128²; the hanging cloths with the
+//! rotations: 5–10 per Newton iteration from 32² to 256², block Jacobi 35–466), but the
+//! hierarchy's set-up (the Galerkin products) and the V-cycle's passes over memory make it pay
+//! only on the largest meshes.
 //!
-//! Everything is built from the matrix alone (rigid-body blocks included: they join aggregates
-//! where the coupling is strong, and are left to the smoother where it is weak), deterministic
-//! and independent of the thread count (rows are computed independently).
+//! Everything is built from the matrix and the unknowns' positions (rigid-body blocks included:
+//! they join aggregates where the coupling is strong, and are left to the smoother where it is
+//! weak), deterministic and independent of the thread count (rows are computed independently).
 
 use super::block_sparse::{dot, Block, BlockSparseMatrix, ROWS_PER_TASK};
 use super::pcg::block_jacobi;
@@ -75,11 +76,6 @@ fn add_scaled(acc: &mut Block, s: f64, b: &Block) {
     for (x, y) in acc.iter_mut().zip(b) {
         *x += s * y;
     }
-}
-
-#[inline]
-fn frobenius(a: &Block) -> f64 {
-    a.iter().map(|x| x * x).sum::<f64>().sqrt()
 }
 
 #[inline]
@@ -334,35 +330,130 @@ fn power_iteration(a: &BlockSparseMatrix, inv_diag: &[Block], x: &mut [f64], ite
     lambda
 }
 
-/// Aggregates of strongly coupled blocks: `aggregate[i]` (`u32::MAX`: none, a block coupled
-/// only weakly, left to the smoother) and their number.
-fn aggregate(a: &BlockSparseMatrix) -> (Vec<u32>, usize) {
+/// The near-null space on one level: the motions that cost (nearly) no elastic energy, which
+/// interpolation must reproduce exactly. Per 3-block, its rows of the mode matrix (3 × `columns`,
+/// row-major), and which node the block belongs to (a node's blocks aggregate together: on coarse
+/// levels an aggregate's translation and rotation blocks).
+#[derive(Clone, Debug)]
+pub struct NearNullSpace {
+    /// 3 (the translations) or 6 (translations and rotations).
+    columns: usize,
+    rows: Vec<[f64; 18]>,
+    node_of_block: Vec<u32>,
+    n_nodes: usize,
+}
+
+/// What a 3-block of unknowns is, for the rigid motions of the whole.
+#[derive(Clone, Copy, Debug)]
+pub enum BlockMotion {
+    /// A velocity at a point (a node, or a body's linear velocity at its centre of mass), m.
+    Point([f64; 3]),
+    /// A body's angular velocity.
+    Angular,
+}
+
+impl NearNullSpace {
+    /// The three translations: each block moves as a 3-vector.
+    pub fn translations(n_blocks: usize) -> Self {
+        let mut row = [0.0; 18];
+        (row[0], row[4], row[8]) = (1.0, 1.0, 1.0);
+        Self {
+            columns: 3,
+            rows: vec![row; n_blocks],
+            node_of_block: (0..n_blocks as u32).collect(),
+            n_nodes: n_blocks,
+        }
+    }
+
+    /// The six rigid motions `v = t + ω × x`: `[I | −[x]×]` at a point, `[0 | I]` for an angular
+    /// velocity. Shells and plates need the rotations: their low-energy motions are local
+    /// rotations (bending), which piecewise translations do not span.
+    pub fn rigid_motions(blocks: &[BlockMotion]) -> Self {
+        let rows = blocks
+            .iter()
+            .map(|b| {
+                let mut row = [0.0; 18];
+                match *b {
+                    BlockMotion::Point([x, y, z]) => {
+                        // Row-major 3 × 6: [1 0 0 | 0 z −y; 0 1 0 | −z 0 x; 0 0 1 | y −x 0].
+                        (row[0], row[7], row[14]) = (1.0, 1.0, 1.0);
+                        (row[4], row[5]) = (z, -y);
+                        (row[9], row[11]) = (-z, x);
+                        (row[15], row[16]) = (y, -x);
+                    }
+                    BlockMotion::Angular => (row[3], row[10], row[17]) = (1.0, 1.0, 1.0),
+                }
+                row
+            })
+            .collect();
+        Self {
+            columns: 6,
+            rows,
+            node_of_block: (0..blocks.len() as u32).collect(),
+            n_nodes: blocks.len(),
+        }
+    }
+}
+
+/// Aggregates of strongly coupled nodes: `aggregate[node]` (`u32::MAX`: none, a node coupled
+/// only weakly, left to the smoother) and their number. Nodes `I ≠ J` are strongly coupled when
+/// `‖A_IJ‖ ≥ θ √(‖A_II‖ ‖A_JJ‖)` (Frobenius norms over their blocks).
+fn aggregate(a: &BlockSparseMatrix, space: &NearNullSpace) -> (Vec<u32>, usize) {
     const NONE: u32 = u32::MAX;
-    let n = a.n_blocks;
-    let diag: Vec<f64> = (0..n).map(|r| frobenius(&a.values[a.diagonal[r]])).collect();
-    let diag = &diag;
-    let strong = |r: usize| {
-        (a.row_start[r]..a.row_start[r + 1]).filter_map(move |idx| {
-            let c = a.cols[idx] as usize;
-            (c != r && frobenius(&a.values[idx]) >= STRENGTH_THRESHOLD * (diag[r] * diag[c]).sqrt()).then_some(c)
+    let n = space.n_nodes;
+    let mut blocks_of_node: Vec<Vec<u32>> = vec![Vec::new(); n];
+    for (b, &node) in space.node_of_block.iter().enumerate() {
+        blocks_of_node[node as usize].push(b as u32);
+    }
+    // Squared norms of the node couplings, row by row.
+    let mut coupling: Vec<Vec<(u32, f64)>> = Vec::with_capacity(n);
+    let mut slot = vec![u32::MAX; n];
+    for blocks in &blocks_of_node {
+        let mut row: Vec<(u32, f64)> = Vec::new();
+        for &r in blocks {
+            for idx in a.row_start[r as usize]..a.row_start[r as usize + 1] {
+                let node = space.node_of_block[a.cols[idx] as usize];
+                let f2: f64 = a.values[idx].iter().map(|x| x * x).sum();
+                match slot[node as usize] {
+                    u32::MAX => {
+                        slot[node as usize] = row.len() as u32;
+                        row.push((node, f2));
+                    }
+                    k => row[k as usize].1 += f2,
+                }
+            }
+        }
+        for &(node, _) in &row {
+            slot[node as usize] = u32::MAX;
+        }
+        coupling.push(row);
+    }
+    let diag: Vec<f64> = (0..n)
+        .map(|i| {
+            coupling[i]
+                .iter()
+                .find(|e| e.0 as usize == i)
+                .map_or(0.0, |e| e.1.sqrt())
         })
-    };
+        .collect();
+    let strong: Vec<Vec<usize>> = (0..n)
+        .map(|i| {
+            coupling[i]
+                .iter()
+                .filter(|&&(j, f2)| {
+                    j as usize != i && f2.sqrt() >= STRENGTH_THRESHOLD * (diag[i] * diag[j as usize]).sqrt()
+                })
+                .map(|&(j, _)| j as usize)
+                .collect()
+        })
+        .collect();
     let mut agg = vec![NONE; n];
     let mut count = 0u32;
-    // 1: a block whose strong neighbours are all free seeds an aggregate with them.
+    // 1: a node whose strong neighbours are all free seeds an aggregate with them.
     for r in 0..n {
-        if agg[r] != NONE {
-            continue;
-        }
-        let mut any = false;
-        let mut free = true;
-        for c in strong(r) {
-            any = true;
-            free &= agg[c] == NONE;
-        }
-        if any && free {
+        if agg[r] == NONE && !strong[r].is_empty() && strong[r].iter().all(|&c| agg[c] == NONE) {
             agg[r] = count;
-            for c in strong(r) {
+            for &c in &strong[r] {
                 agg[c] = count;
             }
             count += 1;
@@ -372,16 +463,16 @@ fn aggregate(a: &BlockSparseMatrix) -> (Vec<u32>, usize) {
     let first_pass = agg.clone();
     for r in 0..n {
         if agg[r] == NONE {
-            if let Some(c) = strong(r).find(|&c| first_pass[c] != NONE) {
+            if let Some(&c) = strong[r].iter().find(|&&c| first_pass[c] != NONE) {
                 agg[r] = first_pass[c];
             }
         }
     }
     // 3: what is still free (strong neighbours all in new aggregates) seeds new ones.
     for r in 0..n {
-        if agg[r] == NONE && strong(r).next().is_some() {
+        if agg[r] == NONE && !strong[r].is_empty() {
             agg[r] = count;
-            for c in strong(r) {
+            for &c in &strong[r] {
                 if agg[c] == NONE {
                     agg[c] = count;
                 }
@@ -460,6 +551,12 @@ impl Amg {
     /// Build the hierarchy of `a` (symmetric positive definite, as a Newton Hessian projected or
     /// held definite).
     pub fn new(a: &BlockSparseMatrix) -> Amg {
+        Self::with_near_null_space(a, NearNullSpace::translations(a.n_blocks))
+    }
+
+    /// [`Amg::new`] with the given near-null space of the finest level (e.g.
+    /// [`NearNullSpace::rigid_motions`] of the unknowns' positions).
+    pub fn with_near_null_space(a: &BlockSparseMatrix, mut space: NearNullSpace) -> Amg {
         let mut levels: Vec<Level> = Vec::new();
         let mut smoothers = Vec::new();
         let mut top = Vec::new();
@@ -476,10 +573,10 @@ impl Amg {
             let next = if done {
                 None
             } else {
-                let (agg, n_agg) = aggregate(fine);
+                let (agg, n_agg) = aggregate(fine, &space);
                 // A coarsening that barely shrinks the level is not worth a level.
-                (n_agg > 0 && (n_agg as f64) < 0.85 * fine.n_blocks as f64)
-                    .then(|| coarsen(fine, &inv_diag, lambda_max, &agg, n_agg))
+                (n_agg > 0 && ((n_agg * space.columns / 3) as f64) < 0.85 * fine.n_blocks as f64)
+                    .then(|| coarsen(fine, &inv_diag, lambda_max, &space, &agg, n_agg))
             };
             smoothers.push(Smoother {
                 inv_diag,
@@ -487,7 +584,10 @@ impl Amg {
                 degree: CHEBYSHEV_DEGREE,
             });
             match next {
-                Some(level) => levels.push(level),
+                Some((level, coarse_space)) => {
+                    levels.push(level);
+                    space = coarse_space;
+                }
                 None => break,
             }
         }
@@ -571,67 +671,141 @@ fn cycle(
 }
 
 /// The next coarser level from aggregates: the tentative prolongator (each aggregate's blocks
-/// move as one, `I/√size`), smoothed by one damped Jacobi step `(I − ω D⁻¹A)`, `ω = 4/(3λ_max)`,
-/// and the Galerkin product.
-fn coarsen(a: &BlockSparseMatrix, inv_diag: &[Block], lambda_max: f64, agg: &[u32], n_agg: usize) -> Level {
-    let mut size = vec![0usize; n_agg];
-    for &g in agg {
+/// move by the near-null space's modes, orthonormalised per aggregate), smoothed by one damped
+/// Jacobi step `(I − ω D⁻¹A)`, `ω = 4/(3λ_max)`, the Galerkin product, and the coarse level's
+/// near-null space (the modes' coefficients, `R` of the aggregates' QR factorisations).
+fn coarsen(
+    a: &BlockSparseMatrix,
+    inv_diag: &[Block],
+    lambda_max: f64,
+    space: &NearNullSpace,
+    agg: &[u32],
+    n_agg: usize,
+) -> (Level, NearNullSpace) {
+    let columns = space.columns;
+    // Coarse blocks per aggregate: one per three modes.
+    let per = columns / 3;
+    let n_coarse = n_agg * per;
+    let mut blocks_of_agg: Vec<Vec<usize>> = vec![Vec::new(); n_agg];
+    for (b, &node) in space.node_of_block.iter().enumerate() {
+        let g = agg[node as usize];
         if g != u32::MAX {
-            size[g as usize] += 1;
+            blocks_of_agg[g as usize].push(b);
         }
     }
-    let scale: Vec<f64> = size.iter().map(|&s| 1.0 / (s as f64).sqrt()).collect();
+    // Per fine block: its tentative prolongator blocks (coarse column, 3×3).
+    let mut tentative: Vec<Vec<(u32, Block)>> = vec![Vec::new(); a.n_blocks];
+    let mut coarse_rows = vec![[0.0; 18]; n_coarse];
+    for (g, blocks) in blocks_of_agg.iter().enumerate() {
+        let m = blocks.len();
+        let local = DMatrix::from_fn(3 * m, columns, |i, j| space.rows[blocks[i / 3]][columns * (i % 3) + j]);
+        let qr = local.qr();
+        let (q, r) = (qr.q(), qr.r());
+        let k = q.ncols();
+        let largest = (0..k).map(|j| r[(j, j)].abs()).fold(0.0, f64::max);
+        // A mode the aggregate cannot tell from the others (a rotation of one or two nodes)
+        // gets no column: its coarse unknowns are decoupled (see below).
+        let kept = |j: usize| j < k && r[(j, j)].abs() > 1e-10 * largest;
+        for (p, &b) in blocks.iter().enumerate() {
+            for c in 0..per {
+                let mut block = [0.0; 9];
+                for i in 0..3 {
+                    for jj in 0..3 {
+                        if kept(3 * c + jj) {
+                            block[3 * i + jj] = q[(3 * p + i, 3 * c + jj)];
+                        }
+                    }
+                }
+                tentative[b].push(((g * per + c) as u32, block));
+            }
+        }
+        for c in 0..per {
+            let row = &mut coarse_rows[g * per + c];
+            for i in 0..3 {
+                if kept(3 * c + i) {
+                    for j in 0..columns {
+                        row[columns * i + j] = r[(3 * c + i, j)];
+                    }
+                }
+            }
+        }
+    }
+    let tentative = BlockRows::from_rows(a.n_blocks, n_coarse, |r, out| out.extend_from_slice(&tentative[r]));
+    // P = T − ω D⁻¹ A T.
     let omega = 4.0 / (3.0 * lambda_max);
-    let identity: Block = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
-    let prolongator = BlockRows::from_rows(a.n_blocks, n_agg, |r, out| {
-        // Few distinct aggregates per row: a short list merged by linear search.
-        let mut row: Vec<(u32, Block)> = Vec::new();
-        let mut add = |g: u32, s: f64, b: &Block| match row.iter_mut().find(|e| e.0 == g) {
-            Some(e) => add_scaled(&mut e.1, s, b),
-            None => {
-                let mut v = [0.0; 9];
-                add_scaled(&mut v, s, b);
-                row.push((g, v));
-            }
-        };
-        if agg[r] != u32::MAX {
-            add(agg[r], scale[agg[r] as usize], &identity);
-        }
-        for idx in a.row_start[r]..a.row_start[r + 1] {
-            let g = agg[a.cols[idx] as usize];
-            if g != u32::MAX {
-                add(g, -omega * scale[g as usize], &mul(&inv_diag[r], &a.values[idx]));
+    let jacobi_a = BlockRows::from_rows(a.n_blocks, a.n_blocks, |r, out| {
+        out.extend((a.row_start[r]..a.row_start[r + 1]).map(|idx| (a.cols[idx], mul(&inv_diag[r], &a.values[idx]))));
+    });
+    let smoothing = product(a.n_blocks, &tentative, |r| jacobi_a.row(r));
+    let prolongator = BlockRows::from_rows(a.n_blocks, n_coarse, |r, out| {
+        let start = out.len();
+        out.extend(tentative.row(r).map(|(c, b)| (c as u32, *b)));
+        for (c, b) in smoothing.row(r) {
+            match out[start..].iter_mut().find(|e| e.0 as usize == c) {
+                Some(e) => add_scaled(&mut e.1, -omega, b),
+                None => {
+                    let mut v = [0.0; 9];
+                    add_scaled(&mut v, -omega, b);
+                    out.push((c as u32, v));
+                }
             }
         }
-        row.sort_unstable_by_key(|e| e.0);
-        out.extend(row);
+        out[start..].sort_unstable_by_key(|e| e.0);
     });
     let restriction = prolongator.transposed();
     // A P, then Pᵀ (A P).
     let ap = product(a.n_blocks, &prolongator, |r| {
         (a.row_start[r]..a.row_start[r + 1]).map(|idx| (a.cols[idx] as usize, &a.values[idx]))
     });
-    let coarse = product(n_agg, &ap, |r| restriction.row(r));
+    let coarse = product(n_coarse, &ap, |r| restriction.row(r));
     let mut matrix = BlockSparseMatrix {
-        n_blocks: n_agg,
-        diagonal: Vec::with_capacity(n_agg),
+        n_blocks: n_coarse,
+        diagonal: Vec::with_capacity(n_coarse),
         row_start: coarse.row_start,
         cols: coarse.cols,
         values: coarse.values,
     };
-    for r in 0..n_agg {
+    for r in 0..n_coarse {
         let span = matrix.row_start[r]..matrix.row_start[r + 1];
-        // Every aggregate has a block: P's column is nonzero there, and so is the diagonal of PᵀAP.
+        // P's column blocks of an aggregate are nonzero on its blocks: PᵀAP has its diagonal.
         let k = matrix.cols[span.clone()]
             .binary_search(&(r as u32))
             .expect("the coarse matrix has its diagonal");
         matrix.diagonal.push(span.start + k);
     }
-    Level {
-        matrix,
-        prolongator,
-        restriction,
+    // Coarse unknowns without a mode are decoupled: a unit diagonal (their right-hand side is
+    // always zero, so they stay zero).
+    let mean_diagonal = {
+        let d: Vec<f64> = matrix
+            .diagonal
+            .iter()
+            .flat_map(|&i| [0, 4, 8].map(|k| matrix.values[i][k]))
+            .collect();
+        let positive: Vec<f64> = d.into_iter().filter(|&x| x > 0.0).collect();
+        positive.iter().sum::<f64>() / positive.len().max(1) as f64
+    };
+    for r in 0..n_coarse {
+        let i = matrix.diagonal[r];
+        for k in [0, 4, 8] {
+            if matrix.values[i][k] <= 1e-14 * mean_diagonal {
+                matrix.values[i][k] = mean_diagonal.max(1.0e-300);
+            }
+        }
     }
+    let coarse_space = NearNullSpace {
+        columns,
+        rows: coarse_rows,
+        node_of_block: (0..n_coarse).map(|b| (b / per) as u32).collect(),
+        n_nodes: n_agg,
+    };
+    (
+        Level {
+            matrix,
+            prolongator,
+            restriction,
+        },
+        coarse_space,
+    )
 }
 
 fn coarsest_solve(a: &BlockSparseMatrix) -> CoarsestSolve {
@@ -818,10 +992,28 @@ mod tests {
         ax.iter().zip(b).map(|(p, q)| (p - q).powi(2)).sum::<f64>().sqrt()
     }
 
+    /// The grid's node positions (spacing 1/m), for the rigid motions.
+    fn grid_positions(m: usize) -> Vec<BlockMotion> {
+        (0..m * m)
+            .map(|k| BlockMotion::Point([(k / m) as f64 / m as f64, (k % m) as f64 / m as f64, 0.0]))
+            .collect()
+    }
+
     #[test]
     fn the_galerkin_matrix_is_pt_a_p() {
+        for rotations in [false, true] {
+            galerkin_is_pt_a_p(rotations);
+        }
+    }
+
+    fn galerkin_is_pt_a_p(rotations: bool) {
         let a = grid(24, 1.0, 1e-3);
-        let (agg, n_agg) = aggregate(&a);
+        let space = if rotations {
+            NearNullSpace::rigid_motions(&grid_positions(24))
+        } else {
+            NearNullSpace::translations(a.n_blocks)
+        };
+        let (agg, n_agg) = aggregate(&a, &space);
         assert!(
             n_agg > 0 && n_agg < a.n_blocks / 3,
             "{n_agg} aggregates of {}",
@@ -829,7 +1021,10 @@ mod tests {
         );
         let inv = block_jacobi(&a);
         let lambda = SPECTRAL_SAFETY * spectral_radius(&a, &inv);
-        let level = coarsen(&a, &inv, lambda, &agg, n_agg);
+        let (level, coarse_space) = coarsen(&a, &inv, lambda, &space, &agg, n_agg);
+        let n_agg = level.matrix.n_blocks;
+        assert_eq!(coarse_space.rows.len(), n_agg);
+        assert_eq!(n_agg % (space.columns / 3), 0);
         // Pᵀ A P x against the coarse product, for a random coarse x.
         let xc = rhs(3 * n_agg);
         let mut px = vec![0.0; a.dim()];
