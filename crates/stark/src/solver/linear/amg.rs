@@ -16,7 +16,7 @@
 //!
 //! Where it stands (BENCHMARKS.md, "Algebraic multigrid"): CG's iteration count stays nearly flat
 //! under refinement (a membrane-like grid: 13–14 from 16² to 128²; the hanging cloths with the
-//! rotations: 5–10 per Newton iteration from 32² to 256², block Jacobi 35–466), but the
+//! rotations: 5–15 per Newton iteration from 32² to 256², block Jacobi 35–466), but the
 //! hierarchy's set-up (the Galerkin products) and the V-cycle's passes over memory make it pay
 //! only on the largest meshes.
 //!
@@ -398,7 +398,7 @@ impl NearNullSpace {
 /// Aggregates of strongly coupled nodes: `aggregate[node]` (`u32::MAX`: none, a node coupled
 /// only weakly, left to the smoother) and their number. Nodes `I ≠ J` are strongly coupled when
 /// `‖A_IJ‖ ≥ θ √(‖A_II‖ ‖A_JJ‖)` (Frobenius norms over their blocks).
-fn aggregate(a: &BlockSparseMatrix, space: &NearNullSpace) -> (Vec<u32>, usize) {
+fn aggregate(a: &BlockSparseMatrix, space: &NearNullSpace) -> (Vec<u32>, usize, Vec<Vec<usize>>) {
     const NONE: u32 = u32::MAX;
     let n = space.n_nodes;
     let mut blocks_of_node: Vec<Vec<u32>> = vec![Vec::new(); n];
@@ -480,7 +480,7 @@ fn aggregate(a: &BlockSparseMatrix, space: &NearNullSpace) -> (Vec<u32>, usize) 
             count += 1;
         }
     }
-    (agg, count as usize)
+    (agg, count as usize, strong)
 }
 
 /// One level below the finest: how to get there and back.
@@ -573,10 +573,10 @@ impl Amg {
             let next = if done {
                 None
             } else {
-                let (agg, n_agg) = aggregate(fine, &space);
+                let (agg, n_agg, strong) = aggregate(fine, &space);
                 // A coarsening that barely shrinks the level is not worth a level.
                 (n_agg > 0 && ((n_agg * space.columns / 3) as f64) < 0.85 * fine.n_blocks as f64)
-                    .then(|| coarsen(fine, &inv_diag, lambda_max, &space, &agg, n_agg))
+                    .then(|| coarsen(fine, lambda_max, &space, &agg, n_agg, &strong))
             };
             smoothers.push(Smoother {
                 inv_diag,
@@ -676,11 +676,11 @@ fn cycle(
 /// near-null space (the modes' coefficients, `R` of the aggregates' QR factorisations).
 fn coarsen(
     a: &BlockSparseMatrix,
-    inv_diag: &[Block],
     lambda_max: f64,
     space: &NearNullSpace,
     agg: &[u32],
     n_agg: usize,
+    strong: &[Vec<usize>],
 ) -> (Level, NearNullSpace) {
     let columns = space.columns;
     // Coarse blocks per aggregate: one per three modes.
@@ -733,8 +733,36 @@ fn coarsen(
     let tentative = BlockRows::from_rows(a.n_blocks, n_coarse, |r, out| out.extend_from_slice(&tentative[r]));
     // P = T − ω D⁻¹ A T.
     let omega = 4.0 / (3.0 * lambda_max);
+    // The smoothing uses the strong couplings only (the weak ones lumped onto the diagonal, so
+    // that translations keep their action): an interpolation as wide as the aggregates'
+    // neighbourhoods, not as the matrix's stencil (a cloth's bending couples two rings).
     let jacobi_a = BlockRows::from_rows(a.n_blocks, a.n_blocks, |r, out| {
-        out.extend((a.row_start[r]..a.row_start[r + 1]).map(|idx| (a.cols[idx], mul(&inv_diag[r], &a.values[idx]))));
+        let node = space.node_of_block[r] as usize;
+        let is_strong = |c: usize| {
+            let other = space.node_of_block[c] as usize;
+            other == node || strong[node].contains(&other)
+        };
+        let mut diagonal = a.values[a.diagonal[r]];
+        for idx in a.row_start[r]..a.row_start[r + 1] {
+            let c = a.cols[idx] as usize;
+            if c != r && !is_strong(c) {
+                add_scaled(&mut diagonal, 1.0, &a.values[idx]);
+            }
+        }
+        let inverse = nalgebra::Matrix3::from_row_slice(&diagonal)
+            .try_inverse()
+            .filter(|m| m.iter().all(|x| x.is_finite()))
+            .map_or([1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0], |m| {
+                std::array::from_fn(|k| m[(k / 3, k % 3)])
+            });
+        for idx in a.row_start[r]..a.row_start[r + 1] {
+            let c = a.cols[idx] as usize;
+            if c == r {
+                out.push((c as u32, mul(&inverse, &diagonal)));
+            } else if is_strong(c) {
+                out.push((c as u32, mul(&inverse, &a.values[idx])));
+            }
+        }
     });
     let smoothing = product(a.n_blocks, &tentative, |r| jacobi_a.row(r));
     let prolongator = BlockRows::from_rows(a.n_blocks, n_coarse, |r, out| {
@@ -1013,7 +1041,7 @@ mod tests {
         } else {
             NearNullSpace::translations(a.n_blocks)
         };
-        let (agg, n_agg) = aggregate(&a, &space);
+        let (agg, n_agg, strong) = aggregate(&a, &space);
         assert!(
             n_agg > 0 && n_agg < a.n_blocks / 3,
             "{n_agg} aggregates of {}",
@@ -1021,7 +1049,7 @@ mod tests {
         );
         let inv = block_jacobi(&a);
         let lambda = SPECTRAL_SAFETY * spectral_radius(&a, &inv);
-        let (level, coarse_space) = coarsen(&a, &inv, lambda, &space, &agg, n_agg);
+        let (level, coarse_space) = coarsen(&a, lambda, &space, &agg, n_agg, &strong);
         let n_agg = level.matrix.n_blocks;
         assert_eq!(coarse_space.rows.len(), n_agg);
         assert_eq!(n_agg % (space.columns / 3), 0);
