@@ -894,34 +894,14 @@ fn chebyshev(
     let inv = &smoother.inv_diag;
     let rows = 3 * ROWS_PER_TASK;
     // d = D⁻¹ r / θ, x += d (r = b from zero).
-    let first = |x: &mut [f64], d: &mut [f64], r: &[f64]| {
-        x.par_chunks_mut(rows)
-            .zip(d.par_chunks_mut(rows))
-            .zip(r.par_chunks(rows))
-            .zip(inv.par_chunks(ROWS_PER_TASK))
-            .for_each(|(((xs, ds), rs), ms)| {
-                for (((x, d), r), m) in xs
-                    .chunks_exact_mut(3)
-                    .zip(ds.chunks_exact_mut(3))
-                    .zip(rs.chunks_exact(3))
-                    .zip(ms)
-                {
-                    let z = apply(m, r);
-                    for i in 0..3 {
-                        d[i] = z[i] / theta;
-                        x[i] = if x_is_zero { d[i] } else { x[i] + d[i] };
-                    }
-                }
-            });
-    };
     if x_is_zero {
-        first(x, d, b);
+        step_direction(x, d, b, inv, Direction::First { theta }, true);
         if smoother.degree > 1 {
             r.copy_from_slice(b);
         }
     } else {
         residual_into(a, x, b, r);
-        first(x, d, r);
+        step_direction(x, d, r, inv, Direction::First { theta }, false);
     }
     for _ in 1..smoother.degree {
         // r −= A d (r = b − A x), then the next direction.
@@ -941,26 +921,43 @@ fn chebyshev(
         let rho_next = 1.0 / (2.0 * sigma - rho);
         let keep = rho_next * rho;
         let push = 2.0 * rho_next / delta;
-        x.par_chunks_mut(rows)
-            .zip(d.par_chunks_mut(rows))
-            .zip(r.par_chunks(rows))
-            .zip(inv.par_chunks(ROWS_PER_TASK))
-            .for_each(|(((xs, ds), rs), ms)| {
-                for (((x, d), r), m) in xs
-                    .chunks_exact_mut(3)
-                    .zip(ds.chunks_exact_mut(3))
-                    .zip(rs.chunks_exact(3))
-                    .zip(ms)
-                {
-                    let z = apply(m, r);
-                    for i in 0..3 {
-                        d[i] = keep * d[i] + push * z[i];
-                        x[i] += d[i];
-                    }
-                }
-            });
+        step_direction(x, d, r, inv, Direction::Next { keep, push }, false);
         rho = rho_next;
     }
+}
+
+/// A Chebyshev direction: the first `D⁻¹r/θ`, the next ones `keep·d + push·D⁻¹r`.
+#[derive(Clone, Copy)]
+enum Direction {
+    First { theta: f64 },
+    Next { keep: f64, push: f64 },
+}
+
+/// Chebyshev's direction into `d`, then `x ← x + d` (`x ← d` when `x_from_zero`). One pass over
+/// the vectors.
+fn step_direction(x: &mut [f64], d: &mut [f64], r: &[f64], inv: &[Block], direction: Direction, x_from_zero: bool) {
+    let rows = 3 * ROWS_PER_TASK;
+    x.par_chunks_mut(rows)
+        .zip(d.par_chunks_mut(rows))
+        .zip(r.par_chunks(rows))
+        .zip(inv.par_chunks(ROWS_PER_TASK))
+        .for_each(|(((xs, ds), rs), ms)| {
+            for (((x, d), r), m) in xs
+                .chunks_exact_mut(3)
+                .zip(ds.chunks_exact_mut(3))
+                .zip(rs.chunks_exact(3))
+                .zip(ms)
+            {
+                let z = apply(m, r);
+                for i in 0..3 {
+                    d[i] = match direction {
+                        Direction::First { theta } => z[i] / theta,
+                        Direction::Next { keep, push } => keep * d[i] + push * z[i],
+                    };
+                    x[i] = if x_from_zero { d[i] } else { x[i] + d[i] };
+                }
+            }
+        });
 }
 
 #[cfg(test)]
