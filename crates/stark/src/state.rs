@@ -152,6 +152,28 @@ pub fn angular_block(n_nodes: usize, b: usize) -> u32 {
     (n_nodes + 2 * b + 1) as u32
 }
 
+/// What DOF block `block` is when there are `n_nodes` nodes (the inverse of [`linear_block`] and
+/// [`angular_block`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BlockKind {
+    /// Node `i`'s velocity.
+    Node(usize),
+    /// Body `b`'s linear velocity.
+    Linear(usize),
+    /// Body `b`'s angular velocity.
+    Angular(usize),
+}
+
+/// See [`BlockKind`].
+#[inline]
+pub fn block_kind(n_nodes: usize, block: usize) -> BlockKind {
+    match block.checked_sub(n_nodes) {
+        None => BlockKind::Node(block),
+        Some(k) if k.is_multiple_of(2) => BlockKind::Linear(k / 2),
+        Some(k) => BlockKind::Angular(k / 2),
+    }
+}
+
 /// Trial pose of a rigid body and the derivatives of its rotation with respect to `ω`. Made by
 /// the kinematic map (`BodyPose::new` and `BodyPose::at_rest` in `energy::kinematics`).
 #[derive(Clone, Copy, Debug)]

@@ -6,7 +6,7 @@
 //! holds. The initial guess is the previous velocity, shortened to the largest valid fraction.
 
 use super::linear::amg::{Amg, BlockMotion, NearNullSpace};
-use super::linear::block_sparse::{dot, norm_inf};
+use super::linear::block_sparse::{dot, norm_inf, BlockSparseMatrix};
 use super::linear::cholesky::CholeskySolver;
 use super::linear::pcg;
 use super::settings::{LinearSolver, NewtonSettings, Projection};
@@ -14,7 +14,7 @@ use super::trace;
 use crate::energy::assembly::{Assembled, Assembler};
 use crate::energy::kinematics::{apply_kinematic_map, BodyPose};
 use crate::energy::{EnergyTerm, EvalMode};
-use crate::state::{dof_blocks, start_velocities, BodyArrays, DofMap, EvalState, NodeArrays};
+use crate::state::{block_kind, dof_blocks, start_velocities, BlockKind, BodyArrays, DofMap, EvalState, NodeArrays};
 use nalgebra::Vector3;
 use serde::Serialize;
 use std::time::Instant;
@@ -264,6 +264,86 @@ const REUSE_BELOW_RELATIVE_RESIDUAL: f64 = 1e-2;
 /// fresh).
 const AMG_KEPT_MIN_CG: usize = 20;
 
+/// The near-null space of the unknowns for multigrid: their rigid motions at the iterate
+/// (nodes, bodies' centres of mass and spins).
+fn rigid_motions_of_unknowns(dofs: &DofMap, n_nodes: usize, x: &[Vector3<f64>], poses: &[BodyPose]) -> NearNullSpace {
+    let motions: Vec<BlockMotion> = dofs
+        .block_of_dof
+        .iter()
+        .map(|&b| match block_kind(n_nodes, b as usize) {
+            BlockKind::Node(i) => BlockMotion::Point(x[i].into()),
+            BlockKind::Linear(body) => BlockMotion::Point(poses[body].t.into()),
+            BlockKind::Angular(_) => BlockMotion::Angular,
+        })
+        .collect();
+    NearNullSpace::rigid_motions(&motions)
+}
+
+/// A multigrid-preconditioned CG solve, and the CG iterations of an attempt with a kept
+/// hierarchy that was given up.
+struct AmgSolve {
+    cg: pcg::CgInfo,
+    retried_cg: usize,
+}
+
+/// CG preconditioned by multigrid. The hierarchy of the step's first Hessian (`new_step`) serves
+/// its later ones (its finest smoother follows the matrix) while CG needs at most twice the
+/// iterations it needed fresh; otherwise a new one. Every step builds its own, so a resumed run
+/// is the same run.
+#[allow(clippy::too_many_arguments)]
+fn amg_solve(
+    kept: &mut Option<(Amg, usize)>,
+    matrix: &BlockSparseMatrix,
+    rhs: &[f64],
+    step: &mut [f64],
+    tol: f64,
+    new_step: bool,
+    settings: &NewtonSettings,
+    motions: impl Fn() -> NearNullSpace,
+    trace: bool,
+) -> AmgSolve {
+    let mut fresh = new_step || kept.as_ref().is_none_or(|(amg, _)| !amg.fits(matrix));
+    let mut retried_cg = 0;
+    loop {
+        let t_build = Instant::now();
+        if fresh {
+            *kept = Some((Amg::with_near_null_space(matrix, motions()), 0));
+        }
+        let (amg, fresh_cg) = kept.as_mut().expect("hierarchy built");
+        if !fresh {
+            amg.refresh_finest(matrix);
+        }
+        let build_s = t_build.elapsed().as_secs_f64();
+        let t_cg = Instant::now();
+        let max_cg = if fresh {
+            settings.cg_max_iterations
+        } else {
+            settings.cg_max_iterations.min((2 * *fresh_cg).max(AMG_KEPT_MIN_CG))
+        };
+        let cg = pcg::solve_preconditioned(matrix, rhs, step, tol, max_cg, &mut |r, z| {
+            amg.precondition(matrix, r, z)
+        });
+        if fresh {
+            *fresh_cg = cg.iterations;
+        }
+        if trace {
+            eprintln!(
+                "  amg ({} hierarchy, levels {:?}, {build_s:.4} s): {} CG iterations in {:.4} s",
+                if fresh { "new" } else { "kept" },
+                amg.shape(matrix).blocks,
+                cg.iterations,
+                t_cg.elapsed().as_secs_f64()
+            );
+        }
+        // Negative curvature is the matrix's, whatever the preconditioner.
+        if cg.converged || cg.indefinite || fresh {
+            return AmgSolve { cg, retried_cg };
+        }
+        retried_cg += cg.iterations;
+        fresh = true;
+    }
+}
+
 /// Solve one step: on success `v` holds the end-of-step velocities.
 pub fn solve(
     ws: &mut NewtonWorkspace,
@@ -480,68 +560,21 @@ pub fn solve(
                 let eta = settings.cg_relative_tolerance.min((residual / r0).sqrt());
                 let tol = (eta * g_norm).max(0.1 * settings.residual_tolerance_n * dt);
                 let info = if settings.linear_solver == LinearSolver::Amg {
-                    // The hierarchy of the step's first Hessian serves its later ones (its finest
-                    // smoother follows the matrix), while CG needs at most twice the iterations
-                    // it needed fresh; otherwise a new one. Every step builds its own, so a
-                    // resumed run is the same run.
-                    let mut fresh = iteration == 0 || ws.amg.as_ref().is_none_or(|(amg, _)| !amg.fits(matrix));
-                    loop {
-                        let t_build = Instant::now();
-                        if fresh {
-                            // The near-null space: the rigid motions of the unknowns at the
-                            // iterate's positions (nodes, bodies' centres of mass and spins).
-                            let n_nodes = problem.nodes.len();
-                            let motions: Vec<BlockMotion> = dofs
-                                .block_of_dof
-                                .iter()
-                                .map(|&b| {
-                                    let b = b as usize;
-                                    if b < n_nodes {
-                                        BlockMotion::Point(ws.x[b].into())
-                                    } else if (b - n_nodes).is_multiple_of(2) {
-                                        BlockMotion::Point(ws.poses[(b - n_nodes) / 2].t.into())
-                                    } else {
-                                        BlockMotion::Angular
-                                    }
-                                })
-                                .collect();
-                            let space = NearNullSpace::rigid_motions(&motions);
-                            ws.amg = Some((Amg::with_near_null_space(matrix, space), 0));
-                        }
-                        let (amg, fresh_cg) = ws.amg.as_mut().expect("hierarchy built");
-                        if !fresh {
-                            amg.refresh_finest(matrix);
-                        }
-                        let build_s = t_build.elapsed().as_secs_f64();
-                        let t_cg = Instant::now();
-                        let max_cg = if fresh {
-                            settings.cg_max_iterations
-                        } else {
-                            settings.cg_max_iterations.min((2 * *fresh_cg).max(AMG_KEPT_MIN_CG))
-                        };
-                        let info =
-                            pcg::solve_preconditioned(matrix, &ws.rhs, &mut ws.step, tol, max_cg, &mut |r, z| {
-                                amg.precondition(matrix, r, z)
-                            });
-                        if fresh {
-                            *fresh_cg = info.iterations;
-                        }
-                        if trace {
-                            eprintln!(
-                                "  amg ({} hierarchy, levels {:?}, {build_s:.4} s): {} CG iterations in {:.4} s",
-                                if fresh { "new" } else { "kept" },
-                                amg.shape(matrix).blocks,
-                                info.iterations,
-                                t_cg.elapsed().as_secs_f64()
-                            );
-                        }
-                        // Negative curvature is the matrix's, whatever the preconditioner.
-                        if info.converged || info.indefinite || fresh {
-                            break info;
-                        }
-                        report.cg_iterations += info.iterations;
-                        fresh = true;
-                    }
+                    let fresh = iteration == 0;
+                    let motions = || rigid_motions_of_unknowns(&dofs, problem.nodes.len(), &ws.x, &ws.poses);
+                    let info = amg_solve(
+                        &mut ws.amg,
+                        matrix,
+                        &ws.rhs,
+                        &mut ws.step,
+                        tol,
+                        fresh,
+                        settings,
+                        motions,
+                        trace,
+                    );
+                    report.cg_iterations += info.retried_cg;
+                    info.cg
                 } else {
                     pcg::solve(matrix, &ws.rhs, &mut ws.step, tol, settings.cg_max_iterations)
                 };

@@ -2,7 +2,7 @@
 //! terms and elements make a step fail its line search.
 
 use crate::energy::{EnergyTerm, EvalMode};
-use crate::state::{DofMap, EvalState};
+use crate::state::{block_kind, BlockKind, DofMap, EvalState};
 
 /// A line-search trial that failed the Armijo condition.
 pub(super) struct Cut<'a> {
@@ -64,15 +64,10 @@ pub(super) fn largest_entry(step: &[f64], dofs: &DofMap, n_nodes: usize) -> Stri
         .max_by(|&a, &b| step[a].abs().total_cmp(&step[b].abs()))
         .unwrap_or(0);
     let block = dofs.block_of_dof.get(d / 3).map_or(0, |&b| b as usize);
-    if block < n_nodes {
-        format!("node {block}")
-    } else {
-        let kind = if (block - n_nodes).is_multiple_of(2) {
-            "lin"
-        } else {
-            "ang"
-        };
-        format!("body {} {kind}", (block - n_nodes) / 2)
+    match block_kind(n_nodes, block) {
+        BlockKind::Node(i) => format!("node {i}"),
+        BlockKind::Linear(b) => format!("body {b} lin"),
+        BlockKind::Angular(b) => format!("body {b} ang"),
     }
 }
 

@@ -87,23 +87,27 @@ fn apply(b: &Block, x: &[f64]) -> [f64; 3] {
     ]
 }
 
-/// `r = b − A x`, one pass over the rows.
-fn residual_into(a: &BlockSparseMatrix, x: &[f64], b: &[f64], r: &mut [f64]) {
+/// `r −= A x`, one pass over the rows.
+fn subtract_product(a: &BlockSparseMatrix, x: &[f64], r: &mut [f64]) {
     r.par_chunks_mut(3 * ROWS_PER_TASK).enumerate().for_each(|(chunk, rs)| {
         let first = chunk * ROWS_PER_TASK;
         for (k, rr) in rs.chunks_exact_mut(3).enumerate() {
             let row = first + k;
-            let mut acc = [b[3 * row], b[3 * row + 1], b[3 * row + 2]];
             for idx in a.row_start[row]..a.row_start[row + 1] {
                 let c = a.cols[idx] as usize;
                 let p = apply(&a.values[idx], &x[3 * c..3 * c + 3]);
-                acc[0] -= p[0];
-                acc[1] -= p[1];
-                acc[2] -= p[2];
+                rr[0] -= p[0];
+                rr[1] -= p[1];
+                rr[2] -= p[2];
             }
-            rr.copy_from_slice(&acc);
         }
     });
+}
+
+/// `r = b − A x`.
+fn residual_into(a: &BlockSparseMatrix, x: &[f64], b: &[f64], r: &mut [f64]) {
+    r.copy_from_slice(b);
+    subtract_product(a, x, r);
 }
 
 /// A rectangular matrix of 3×3 blocks, rows compressed (the prolongator and its transpose).
@@ -892,7 +896,6 @@ fn chebyshev(
     let sigma = theta / delta;
     let mut rho = 1.0 / sigma;
     let inv = &smoother.inv_diag;
-    let rows = 3 * ROWS_PER_TASK;
     // d = D⁻¹ r / θ, x += d (r = b from zero).
     if x_is_zero {
         step_direction(x, d, b, inv, Direction::First { theta }, true);
@@ -905,19 +908,7 @@ fn chebyshev(
     }
     for _ in 1..smoother.degree {
         // r −= A d (r = b − A x), then the next direction.
-        r.par_chunks_mut(rows).enumerate().for_each(|(chunk, rs)| {
-            let row0 = chunk * ROWS_PER_TASK;
-            for (k, rr) in rs.chunks_exact_mut(3).enumerate() {
-                let row = row0 + k;
-                for idx in a.row_start[row]..a.row_start[row + 1] {
-                    let c = a.cols[idx] as usize;
-                    let p = apply(&a.values[idx], &d[3 * c..3 * c + 3]);
-                    rr[0] -= p[0];
-                    rr[1] -= p[1];
-                    rr[2] -= p[2];
-                }
-            }
-        });
+        subtract_product(a, d, r);
         let rho_next = 1.0 / (2.0 * sigma - rho);
         let keep = rho_next * rho;
         let push = 2.0 * rho_next / delta;
@@ -1022,6 +1013,29 @@ mod tests {
         (0..m * m)
             .map(|k| BlockMotion::Point([(k / m) as f64 / m as f64, (k % m) as f64 / m as f64, 0.0]))
             .collect()
+    }
+
+    /// The rigid-motion rows give a point's velocity `t + ω × x` and a body's spin `ω` for the
+    /// coefficients `(t, ω)`.
+    #[test]
+    fn rigid_motion_rows_are_translations_plus_rotations() {
+        let (t, w, x) = ([0.3, -1.2, 0.7], [2.0, 0.5, -0.9], [0.4, -0.25, 1.5]);
+        let space = NearNullSpace::rigid_motions(&[BlockMotion::Point(x), BlockMotion::Angular]);
+        let coefficients = [t[0], t[1], t[2], w[0], w[1], w[2]];
+        let velocity = |row: &[f64; 18]| -> [f64; 3] {
+            std::array::from_fn(|i| (0..6).map(|j| row[6 * i + j] * coefficients[j]).sum())
+        };
+        let cross = [
+            w[1] * x[2] - w[2] * x[1],
+            w[2] * x[0] - w[0] * x[2],
+            w[0] * x[1] - w[1] * x[0],
+        ];
+        let point = velocity(&space.rows[0]);
+        let spin = velocity(&space.rows[1]);
+        for i in 0..3 {
+            assert!((point[i] - (t[i] + cross[i])).abs() < 1e-14, "{point:?}");
+            assert_eq!(spin[i], w[i]);
+        }
     }
 
     #[test]
