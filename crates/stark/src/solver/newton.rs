@@ -424,12 +424,15 @@ pub fn solve(
     let mut reuse_failed = false;
     // The step's Hessian pattern, and so the Cholesky ordering, depends on this step alone.
     ws.assembler.exact_pattern_next = true;
+    ws.cholesky.fresh_ordering_next = true;
     // The assembly of the current iterate, when the line search already made it (a step
     // accepted by its residual, below).
     let mut assembled: Option<Assembled> = None;
     // The terms were last prepared (contact pairs detected) at the current iterate: the line
     // search prepares each trial, the accepted one included.
     let mut prepared = false;
+    // Diagnostics: the DOF block of the residual's largest entry.
+    let mut residual_at = String::new();
     for iteration in 0..settings.max_iterations {
         problem.place(v, &mut ws.x, &mut ws.poses);
         let t0 = Instant::now();
@@ -496,6 +499,9 @@ pub fn solve(
                 return Ok(report);
             }
             r0 = *first_residual.get_or_insert(residual);
+            if trace {
+                residual_at = trace::largest_entry(&ws.gradient, &dofs, problem.nodes.len());
+            }
 
             // Newton direction.
             let t2 = Instant::now();
@@ -773,7 +779,7 @@ pub fn solve(
             // Diagnostics: one line per iteration on stderr (the residual, the accepted step
             // fraction, the Hessians used, the DOF block of the step's largest entry).
             eprintln!(
-                "it {iteration:2} res {residual:.3e} alpha {alpha:.3e} def {} proj {project} ls {} cg {} step {:.3e} at {}",
+                "it {iteration:2} res {residual:.3e} at {residual_at} alpha {alpha:.3e} def {} proj {project} ls {} cg {} step {:.3e} at {}",
                 definite.on,
                 report.line_search_evaluations,
                 report.cg_iterations,
