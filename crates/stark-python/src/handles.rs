@@ -401,6 +401,35 @@ impl Obstacle {
     }
 }
 
+/// A surface fixed in the world, added by `add_fixed_surface`.
+#[pyclass(module = "starkrs", frozen, get_all)]
+pub struct FixedSurface {
+    /// Its label.
+    pub label: String,
+    /// Its nodes.
+    pub nodes: NodeSet,
+    /// Its contact object.
+    pub contact: ContactHandle,
+}
+
+#[pymethods]
+impl FixedSurface {
+    fn __repr__(&self) -> String {
+        format!("FixedSurface('{}', nodes={})", self.label, self.nodes.len)
+    }
+}
+
+impl FixedSurface {
+    /// Wrap the library's handles.
+    pub fn new(sim: u64, label: &str, h: &stark::presets::FixedSurfaceHandle) -> Self {
+        FixedSurface {
+            label: label.to_string(),
+            nodes: NodeSet::new(sim, h.nodes),
+            contact: ContactHandle::new(sim, h.contact),
+        }
+    }
+}
+
 /// A `[[rigid_body]]` of a scene file: the body, the nodes of its mesh and its contact object.
 /// Functions taking a body, a node set or a contact object take it too.
 #[pyclass(module = "starkrs", frozen, get_all)]
@@ -528,6 +557,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Volume>()?;
     m.add_class::<Line>()?;
     m.add_class::<Obstacle>()?;
+    m.add_class::<FixedSurface>()?;
     m.add_class::<SceneRigidBody>()?;
     Ok(())
 }

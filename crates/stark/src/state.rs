@@ -6,6 +6,17 @@ use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 /// `NodeArrays::body` of a deformable node: it is not attached to a rigid body.
 pub const NO_BODY: u32 = u32::MAX;
 
+/// `NodeArrays::body` of a node fixed in the world (a static obstacle's vertex): it never moves,
+/// its velocity is not an unknown, and the derivatives of energies with respect to it are
+/// dropped (a fixed floor couples nothing through the Hessian, unlike one held by a penalty).
+pub const FIXED_NODE: u32 = u32::MAX - 1;
+
+/// The rigid body of a `NodeArrays::body` entry: `None` for deformable and fixed nodes.
+#[inline]
+pub fn rigid_body_of(body: u32) -> Option<usize> {
+    (body < FIXED_NODE).then_some(body as usize)
+}
+
 /// A DOF block that is not there: padding of an element's stencil, or a rigid node's block in
 /// [`DofMap::dof_of_block`].
 pub const NO_DOF: u32 = u32::MAX;
@@ -60,9 +71,10 @@ pub struct NodeArrays {
     pub force: Vec<Vector3<f64>>,
     /// External acceleration per node (added to gravity), m/s². Persists until changed.
     pub acceleration: Vec<Vector3<f64>>,
-    /// The rigid body a node belongs to ([`NO_BODY`] for deformable nodes). A rigid node is a
-    /// vertex of a body's collision mesh: its `rest` is its body-local position and its position
-    /// follows the body (its own DOF block stays zero and is not an unknown: [`DofMap`]).
+    /// The rigid body a node belongs to ([`NO_BODY`] for deformable nodes, [`FIXED_NODE`] for
+    /// nodes fixed in the world). A rigid node is a vertex of a body's collision mesh: its `rest`
+    /// is its body-local position and its position follows the body (its own DOF block stays
+    /// zero and is not an unknown: [`DofMap`]); a fixed node stays where it is.
     #[serde(default)]
     pub body: Vec<u32>,
 }
@@ -294,7 +306,7 @@ pub fn dof_blocks(nodes: &NodeArrays, bodies: &BodyArrays) -> usize {
 pub struct DofMap {
     /// The block of each unknown.
     pub block_of_dof: Vec<u32>,
-    /// The unknown of each block ([`NO_DOF`] for rigid nodes).
+    /// The unknown of each block ([`NO_DOF`] for rigid and fixed nodes).
     pub dof_of_block: Vec<u32>,
 }
 
@@ -306,9 +318,10 @@ impl DofMap {
             block_of_dof: Vec::with_capacity(n_blocks),
             dof_of_block: vec![NO_DOF; n_blocks],
         };
-        let rigid = |i: usize| nodes.body.get(i).is_some_and(|&b| b != NO_BODY);
+        // Rigid and fixed nodes.
+        let not_deformable = |i: usize| nodes.body.get(i).is_some_and(|&b| b != NO_BODY);
         for block in 0..n_blocks {
-            if block < nodes.len() && rigid(block) {
+            if block < nodes.len() && not_deformable(block) {
                 continue;
             }
             map.dof_of_block[block] = map.block_of_dof.len() as u32;

@@ -710,6 +710,19 @@ class Line:
         """Its contact object, if it has a contact thickness."""
 
 @final
+class FixedSurface:
+    """A surface fixed in the world, added by `add_fixed_surface`."""
+    @property
+    def label(self) -> str:
+        """Its label."""
+    @property
+    def nodes(self) -> NodeSet:
+        """Its nodes."""
+    @property
+    def contact(self) -> ContactHandle:
+        """Its contact object."""
+
+@final
 class Obstacle:
     """A kinematic obstacle added by `add_prescribed_surface`: move it with `sim.set_transform(obstacle, ...)`."""
     @property
@@ -958,6 +971,8 @@ class Simulation:
         self, label: str, vertices: _Points, triangles: _Indices, thickness_m: float, stiffness: float = 1e6
     ) -> Obstacle:
         """A kinematic obstacle: a triangle surface whose nodes all follow prescribed targets."""
+    def add_fixed_surface(self, label: str, vertices: _Points, triangles: _Indices, thickness_m: float) -> FixedSurface:
+        """A contact surface fixed in the world: its nodes never move and are not unknowns of the solve."""
     def prescribe_in_box(
         self, nodes: _HasNodes, center: _Vector, size: _Vector, params: Optional[PrescribedParams] = None
     ) -> PrescribedHandle:

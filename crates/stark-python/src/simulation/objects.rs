@@ -199,6 +199,19 @@ impl Simulation {
         Ok(Obstacle::new(self.id, label, &h))
     }
 
+    /// A contact surface fixed in the world (a floor, a wall): its nodes never move and are not
+    /// unknowns of the solve (unlike `add_prescribed_surface`, it cannot be moved).
+    fn add_fixed_surface(
+        &self,
+        label: &str,
+        vertices: Points,
+        triangles: Elements<3>,
+        thickness_m: f64,
+    ) -> PyResult<FixedSurface> {
+        let h = self.with(|s| s.add_fixed_surface(label, &vertices.0, &triangles.0, thickness_m))?;
+        Ok(FixedSurface::new(self.id, label, &h))
+    }
+
     /// Prescribe the nodes of an object inside the axis-aligned box of `center` and full `size`
     /// (m); selecting no node is an error.
     #[pyo3(signature = (nodes, center, size, params=None))]

@@ -5,7 +5,7 @@ use super::Contact;
 use crate::geometry::aabb::{edge_aabb, triangle_aabb, Aabb};
 use crate::geometry::bvh::Bvh;
 use crate::geometry::intersection::{edge_triangle_intersect, find_edge_triangle_intersections};
-use crate::state::{EvalState, NO_BODY};
+use crate::state::{rigid_body_of, EvalState};
 use nalgebra::Vector3;
 use rayon::prelude::*;
 
@@ -63,7 +63,7 @@ impl Contact {
             && self
                 .objects
                 .iter()
-                .any(|o| state.nodes.body[o.nodes.first as usize] != NO_BODY)
+                .any(|o| rigid_body_of(state.nodes.body[o.nodes.first as usize]).is_some())
     }
 
     /// Split the primitives into those of rigid bodies' meshes and the others (empty without
@@ -75,7 +75,7 @@ impl Contact {
         let rigid: Vec<bool> = self
             .objects
             .iter()
-            .map(|o| state.nodes.body[o.nodes.first as usize] != NO_BODY)
+            .map(|o| rigid_body_of(state.nodes.body[o.nodes.first as usize]).is_some())
             .collect();
         let (rigid_triangles, other_triangles) =
             (0..self.triangles.len() as u32).partition(|&t| rigid[self.tri_obj[t as usize] as usize]);

@@ -13,7 +13,7 @@
 
 use super::block_sparse::BlockSparseMatrix;
 use super::term::{element_stride, EnergyTerm, EvalMode, NO_DOF};
-use crate::state::{DofMap, EvalState};
+use crate::state::{DofMap, EvalState, FIXED_NODE};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -243,10 +243,12 @@ impl Assembler {
             t.write_stencils(state, &mut stencils);
             for s in stencils.iter_mut().filter(|s| **s != NO_DOF) {
                 let dof = dofs.dof_of_block[*s as usize];
-                // A block that is not an unknown (a rigid node's) has no place in the system:
-                // terms reach rigid nodes through their body's blocks.
+                // A fixed node's block is not an unknown: the element's derivatives with respect
+                // to it are dropped. Any other block that is not an unknown (a rigid node's) has
+                // no place in the system: terms reach rigid nodes through their body's blocks.
+                let fixed = state.nodes.body.get(*s as usize) == Some(&FIXED_NODE);
                 assert!(
-                    dof != NO_DOF,
+                    dof != NO_DOF || fixed,
                     "'{}' writes DOF block {s}, which is not an unknown",
                     t.name()
                 );

@@ -11,7 +11,9 @@
 use super::dual::HyperDual;
 use super::psd::project_psd;
 use super::scalar::Scalar;
-use crate::state::{angular_block, linear_block, positions_from_velocities, BodyArrays, NodeArrays, NO_BODY, NO_DOF};
+use crate::state::{
+    angular_block, linear_block, positions_from_velocities, rigid_body_of, BodyArrays, NodeArrays, NO_DOF,
+};
 use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
 
 // The pose type lives with the state it is part of; its constructors are the kinematic map's.
@@ -73,8 +75,8 @@ pub fn apply_kinematic_map(
     positions_from_velocities(nodes, v, dt, x);
     if !bodies.is_empty() {
         for (i, &b) in nodes.body.iter().enumerate() {
-            if b != NO_BODY {
-                x[i] = poses[b as usize].point(&nodes.rest[i]);
+            if let Some(b) = rigid_body_of(b) {
+                x[i] = poses[b].point(&nodes.rest[i]);
             }
         }
     }

@@ -13,7 +13,7 @@ use super::psd::project_psd;
 use super::scalar::Scalar;
 use super::tensor::Vec3;
 use super::term::{width_of_stride, EnergyTerm, EvalMode, StepCheck, NO_DOF};
-use crate::state::{angular_block, linear_block, EvalState, NO_BODY};
+use crate::state::{angular_block, linear_block, EvalState, FIXED_NODE, NO_BODY};
 use nalgebra::Vector3;
 use rayon::prelude::*;
 use std::sync::Mutex;
@@ -70,6 +70,8 @@ impl Node {
                 let b = state.nodes.body[i as usize];
                 if b == NO_BODY {
                     NodeMap::Free { block: i }
+                } else if b == FIXED_NODE {
+                    NodeMap::Fixed
                 } else {
                     NodeMap::Rigid {
                         lin: linear_block(n, b as usize),

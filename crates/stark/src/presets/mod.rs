@@ -14,5 +14,5 @@ pub mod objects;
 pub mod rigid;
 
 pub use materials::{Bending, LineMaterial, SurfaceMaterial, VolumeMaterial};
-pub use objects::{LineHandle, ObstacleHandle, SurfaceHandle, VolumeHandle};
+pub use objects::{FixedSurfaceHandle, LineHandle, ObstacleHandle, SurfaceHandle, VolumeHandle};
 pub use rigid::RigidHandle;

@@ -10,7 +10,7 @@ use crate::deformables::{
 use crate::error::{Result, StarkError};
 use crate::geometry::mesh;
 use crate::simulation::Simulation;
-use crate::state::OutputCells;
+use crate::state::{OutputCells, FIXED_NODE};
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
@@ -71,6 +71,15 @@ pub struct ObstacleHandle {
     pub nodes: NodeSetHandle,
     /// The prescribed positions moving it (`set_transform` on this handle moves the obstacle).
     pub prescribed: PrescribedHandle,
+    /// Its contact object.
+    pub contact: ContactHandle,
+}
+
+/// Handles of a fixed obstacle (a surface whose nodes never move: [`FIXED_NODE`]).
+#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
+pub struct FixedSurfaceHandle {
+    /// Its nodes.
+    pub nodes: NodeSetHandle,
     /// Its contact object.
     pub contact: ContactHandle,
 }
@@ -350,6 +359,34 @@ impl Simulation {
             prescribed,
             contact,
         })
+    }
+
+    /// A contact surface fixed in the world (a floor, a wall): its nodes never move and are not
+    /// unknowns, so the contacts on it couple nothing through the Hessian. Unlike
+    /// [`Simulation::add_prescribed_surface`] (nodes held at their targets by a stiff penalty,
+    /// which can be moved), it does not give way by a micrometre under load, and a floor under a
+    /// towel does not join all the towel's nodes in the linear system (the robot–towel cases:
+    /// a tenth of the factorisation's work).
+    pub fn add_fixed_surface(
+        &mut self,
+        label: &str,
+        vertices: &[Vector3<f64>],
+        triangles: &[[usize; 3]],
+        thickness_m: f64,
+    ) -> Result<FixedSurfaceHandle> {
+        let nodes = self.add_nodes(label, vertices)?;
+        let all: Vec<usize> = (0..vertices.len()).collect();
+        let edges = mesh::edges_from_triangles(triangles);
+        let contact = self
+            .register_contact(label, nodes, triangles, &edges, &all, Some(thickness_m))?
+            .expect("thickness given");
+        self.contact.disable_collision(contact, contact)?;
+        for i in nodes.range() {
+            self.nodes.body[i] = FIXED_NODE;
+        }
+        self.output
+            .add_mesh(label, nodes, OutputCells::Triangles(triangles.to_vec()));
+        Ok(FixedSurfaceHandle { nodes, contact })
     }
 
     /// Prescribe the nodes of `set` inside the axis-aligned box of `center` and full `size` (m).

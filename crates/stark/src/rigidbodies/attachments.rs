@@ -13,7 +13,7 @@ use crate::rigidbodies::{RigidBodyHandle, RigidMeshHandle};
 // Upward on purpose: each model adds its builder methods to `Simulation` in its own
 // `impl Simulation` block (the public builder API), so it names the simulation floor.
 use crate::simulation::Simulation;
-use crate::state::{EvalState, NO_BODY};
+use crate::state::{EvalState, FIXED_NODE, NO_BODY};
 use nalgebra::Vector3;
 
 /// A group of nodes glued to a body.
@@ -151,8 +151,13 @@ impl Simulation {
             }
             let i = set.global(p);
             if self.nodes.body[i] != NO_BODY {
+                let what = if self.nodes.body[i] == FIXED_NODE {
+                    "is fixed in the world"
+                } else {
+                    "belongs to a rigid body"
+                };
                 return Err(StarkError::InvalidInput(format!(
-                    "rigid attachment '{label}': node {p} belongs to a rigid body"
+                    "rigid attachment '{label}': node {p} {what}"
                 )));
             }
             let local = self.body_point_to_local(body, &self.nodes.x[i]);

@@ -22,7 +22,7 @@ use crate::geometry::mesh;
 // `impl Simulation` block (the public builder API), so it names the simulation floor.
 use crate::simulation::Simulation;
 use crate::state::OutputCells;
-use crate::state::{BodyArrays, NodeArrays, NO_BODY};
+use crate::state::{rigid_body_of, BodyArrays, NodeArrays};
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
 pub use inertia::{RigidBodyParams, RigidInertia};
@@ -111,8 +111,7 @@ impl RigidBodies {
             .map(|b| bodies.inertia_world(b).try_inverse().unwrap_or_else(Matrix3::zeros))
             .collect();
         for (i, (m, &b)) in masses.iter_mut().zip(&nodes.body).enumerate() {
-            if b != NO_BODY {
-                let b = b as usize;
+            if let Some(b) = rigid_body_of(b) {
                 let r = nodes.x[i] - bodies.position[b];
                 let inv = &inverse_inertia[b];
                 let rotational = (r.norm_squared() * inv.trace() - r.dot(&(inv * r))) / 3.0;
@@ -464,9 +463,7 @@ impl Simulation {
     /// Put every rigid node at its body's current pose.
     pub(crate) fn place_rigid_nodes(&mut self) {
         for i in 0..self.nodes.len() {
-            let b = self.nodes.body[i];
-            if b != NO_BODY {
-                let b = b as usize;
+            if let Some(b) = rigid_body_of(self.nodes.body[i]) {
                 self.nodes.x[i] = self.bodies.position[b] + self.bodies.orientation[b] * self.nodes.rest[i];
             }
         }

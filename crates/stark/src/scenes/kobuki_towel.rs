@@ -17,7 +17,7 @@ use super::robot_towel_outcome::Sample;
 use crate::contact::ContactHandle;
 use crate::deformables::NodeSetHandle;
 use crate::error::{Result, StarkError};
-use crate::presets::{meshes, ObstacleHandle, SurfaceMaterial};
+use crate::presets::{meshes, FixedSurfaceHandle, SurfaceMaterial};
 use crate::rigidbodies::joints::JointHandle;
 use crate::rigidbodies::{RigidBodyHandle, Shape};
 use crate::robots::urdf::{Actuator, JointOverride, LinkOverride, Robot, RobotOptions};
@@ -485,14 +485,15 @@ pub fn build_with_towel(
     Ok((sim, handles))
 }
 
-/// The floor: a fixed slab with its top at `top_z_m`, under the towel and the robot's path.
-fn add_floor(sim: &mut Simulation, top_z_m: f64, thickness_m: f64) -> Result<ObstacleHandle> {
+/// The floor: a slab fixed in the world with its top at `top_z_m`, under the towel and the
+/// robot's path (the original: a frozen box).
+fn add_floor(sim: &mut Simulation, top_z_m: f64, thickness_m: f64) -> Result<FixedSurfaceHandle> {
     let floor_size = Vector3::new(2.0, 3.0, 0.05);
     let mut floor = meshes::box_mesh(floor_size);
     for v in &mut floor.vertices {
         *v += Vector3::new(0.0, 1.0, top_z_m - floor_size.z / 2.0);
     }
-    sim.add_prescribed_surface("floor", &floor.vertices, &floor.elements, thickness_m, 1e6)
+    sim.add_fixed_surface("floor", &floor.vertices, &floor.elements, thickness_m)
 }
 
 /// Gravity's magnitude, m/s².

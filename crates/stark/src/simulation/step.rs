@@ -285,7 +285,7 @@ impl Simulation {
             self.nodes.v[i] = if self.nodes.body[i] == NO_BODY {
                 self.velocities[i]
             } else {
-                // A rigid node's velocity, for output.
+                // A rigid node's velocity, for output (zero for a fixed node).
                 (self.nodes.x[i] - self.scratch_x[i]) / dt
             };
         }

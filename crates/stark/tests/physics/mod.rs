@@ -5,6 +5,7 @@ pub mod cantilever_matches_linear_elasticity;
 pub mod checks;
 pub mod contact_scenes_never_intersect;
 pub mod default_scene_converges_to_tolerance;
+pub mod fixed_floor_carries_the_weight;
 pub mod franka_grasp;
 pub mod free_fall_matches_backward_euler;
 pub mod friction_is_coulomb_with_default_settings;

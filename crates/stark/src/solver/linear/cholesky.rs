@@ -10,6 +10,10 @@ use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, LltRef, Symbol
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::{Conj, MatMut, Par, Side};
 
+/// An analysis with the step's ordering whose factor has more than this many times the entries of
+/// the last one orders afresh.
+const REORDER_ABOVE_FILL_GROWTH: f64 = 1.5;
+
 /// Cached analysis of one pattern.
 struct Analysis {
     pattern_id: u64,
@@ -104,6 +108,8 @@ pub struct CholeskySolver {
     pub fresh_ordering_next: bool,
     /// Number of symbolic analyses performed (for logs and tests).
     pub analyses: usize,
+    /// Number of them that computed a fresh ordering.
+    pub fresh_orderings: usize,
     /// `factor` holds a complete factorisation of the current analysis.
     factored: bool,
 }
@@ -212,11 +218,22 @@ impl CholeskySolver {
         if self.analysis.as_ref().map(|an| an.pattern_id) != Some(pattern_id) {
             let blocks = a.row_start.len() - 1;
             let stale = self.ordering.as_ref().is_none_or(|o| o.len() != blocks);
-            if std::mem::take(&mut self.fresh_ordering_next) || stale {
+            let mut fresh = std::mem::take(&mut self.fresh_ordering_next) || stale;
+            if fresh {
                 self.ordering = nested_dissection(a);
             }
-            self.analysis = Some(Self::analyse(a, pattern_id, self.ordering.as_deref())?);
+            let previous_len = self.factor_len();
+            let mut analysis = Self::analyse(a, pattern_id, self.ordering.as_deref())?;
+            if !fresh && analysis.symbolic_llt.len_val() as f64 > REORDER_ABOVE_FILL_GROWTH * previous_len as f64 {
+                // The new couplings do not fit the old ordering (an obstacle's nodes that now
+                // touch a whole cloth, ordered early, fill everything in): order afresh.
+                self.ordering = nested_dissection(a);
+                analysis = Self::analyse(a, pattern_id, self.ordering.as_deref())?;
+                fresh = true;
+            }
+            self.analysis = Some(analysis);
             self.analyses += 1;
+            self.fresh_orderings += usize::from(fresh);
         }
         let an = self.analysis.as_ref().expect("analysis present");
         let symbolic = &an.symbolic_llt;
@@ -303,9 +320,9 @@ mod tests {
         assert_eq!(solver.analyses, 1);
     }
 
-    /// A `side × side` grid of nodes with the 9-point stencil plus `extra` couplings (contact
-    /// pairs), symmetric and diagonally dominant.
-    fn grid_matrix(side: usize, extra: &[(u32, u32)]) -> BlockSparseMatrix {
+    /// A `side × side` grid of nodes with the 9-point stencil, `hubs` more nodes after them, and
+    /// `extra` couplings (contact pairs), symmetric and diagonally dominant.
+    fn grid_matrix(side: usize, hubs: usize, extra: &[(u32, u32)]) -> BlockSparseMatrix {
         let node = |i: usize, j: usize| (i * side + j) as u32;
         let mut pairs = Vec::new();
         for i in 0..side {
@@ -323,12 +340,16 @@ mod tests {
         pairs.extend(extra.iter().flat_map(|&(a, b)| [(a, b), (b, a)]));
         pairs.sort();
         pairs.dedup();
-        let n_blocks = side * side;
+        let n_blocks = side * side + hubs;
+        pairs.extend((side * side..n_blocks).map(|h| (h as u32, h as u32)));
+        pairs.sort();
         let mut a = BlockSparseMatrix::from_sorted_pairs(n_blocks, &pairs);
         for r in 0..n_blocks {
+            // Each neighbour block adds 1 to a row's off-diagonal absolute sum.
+            let d = (a.row_start[r + 1] - a.row_start[r]) as f64;
             for idx in a.row_start[r]..a.row_start[r + 1] {
                 a.values[idx] = if a.cols[idx] as usize == r {
-                    [12.0, 0.0, 0.0, 0.0, 12.0, 0.0, 0.0, 0.0, 12.0]
+                    [d, 0.0, 0.0, 0.0, d, 0.0, 0.0, 0.0, d]
                 } else {
                     [-1.0 / 3.0; 9]
                 };
@@ -352,10 +373,10 @@ mod tests {
     #[test]
     fn a_changed_pattern_reuses_the_steps_ordering() {
         let side = 20;
-        let flat = grid_matrix(side, &[]);
-        // A fold: the first row of nodes now touches the last one.
-        let last = (side * (side - 1)) as u32;
-        let folded = grid_matrix(side, &(0..side as u32).map(|j| (j, last + j)).collect::<Vec<_>>());
+        let flat = grid_matrix(side, 0, &[]);
+        // A small fold: the first row of nodes now touches the third.
+        let third = (2 * side) as u32;
+        let folded = grid_matrix(side, 0, &(0..side as u32).map(|j| (j, third + j)).collect::<Vec<_>>());
         let mut solver = CholeskySolver {
             fresh_ordering_next: true,
             ..Default::default()
@@ -381,6 +402,32 @@ mod tests {
         );
     }
 
+    /// An obstacle's node that was on its own and now touches the whole cloth: with the step's
+    /// ordering (which put it first) the factor would be dense; the analysis sees the fill grow
+    /// and orders afresh.
+    #[test]
+    fn an_ordering_that_no_longer_fits_is_replaced() {
+        let side = 20;
+        let hub = (side * side) as u32;
+        let apart = grid_matrix(side, 1, &[]);
+        let touching = grid_matrix(side, 1, &(0..hub).map(|i| (i, hub)).collect::<Vec<_>>());
+        let mut solver = CholeskySolver {
+            fresh_ordering_next: true,
+            ..Default::default()
+        };
+        assert!(solves_exactly(&mut solver, &apart, 1));
+        let apart_len = solver.factor_len();
+        // The hub first: any ordering of the separate node is as good while it is separate.
+        solver.ordering = Some(std::iter::once(hub as usize).chain(0..hub as usize).collect());
+        assert!(solves_exactly(&mut solver, &touching, 2));
+        assert_eq!((solver.analyses, solver.fresh_orderings), (2, 2));
+        assert!(
+            (solver.factor_len() as f64) < 1.5 * apart_len as f64,
+            "{} factor entries against {apart_len} apart",
+            solver.factor_len()
+        );
+    }
+
     /// A cloth-like pattern (a 40 × 40 grid of nodes, 9-point stencil): nested dissection is a
     /// permutation that keeps each block's unknowns together, fills in less than minimum degree,
     /// and the factorisation solves the system.
@@ -388,7 +435,7 @@ mod tests {
     fn nested_dissection_orders_a_grid_with_less_fill() {
         let side = 40;
         let n_blocks = side * side;
-        let a = grid_matrix(side, &[]);
+        let a = grid_matrix(side, 0, &[]);
         let order = nested_dissection(&a).expect("METIS orders the grid");
         let (forward, inverse) = scalar_permutation(&order);
         let mut seen = vec![false; 3 * n_blocks];
