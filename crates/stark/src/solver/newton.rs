@@ -501,6 +501,10 @@ pub fn solve(
             r0 = *first_residual.get_or_insert(residual);
             if trace {
                 residual_at = trace::largest_entry(&ws.gradient, &dofs, problem.nodes.len());
+                if std::env::var_os("STARK_TRACE_TERMS").is_some() {
+                    let shared: Vec<&dyn EnergyTerm> = terms.iter().map(|t| &**t as &dyn EnergyTerm).collect();
+                    trace::print_term_forces(&shared, &state, &dofs, &ws.gradient, dt);
+                }
             }
 
             // Newton direction.

@@ -1,5 +1,6 @@
-//! Newton's diagnostics on stderr (`STARK_NEWTON_TRACE`, `STARK_NEWTON_TRACE_ELEMENTS`): which
-//! terms and elements make a step fail its line search.
+//! Newton's diagnostics on stderr (`STARK_NEWTON_TRACE`, `STARK_NEWTON_TRACE_ELEMENTS`,
+//! `STARK_TRACE_TERMS`): which terms and elements make a step fail its line search, and which
+//! terms make up the residual where it is largest.
 
 use crate::energy::{EnergyTerm, EvalMode};
 use crate::state::{block_kind, BlockKind, DofMap, EvalState};
@@ -59,6 +60,32 @@ impl Cut<'_> {
 }
 
 /// Where the step's largest entry is: `node i`, or `body i lin|ang`.
+/// Diagnostics: each term's force (its gradient / dt) at the DOF block of the gradient's largest
+/// entry.
+pub(super) fn print_term_forces(
+    terms: &[&dyn EnergyTerm],
+    state: &EvalState,
+    dofs: &DofMap,
+    gradient: &[f64],
+    dt: f64,
+) {
+    let d = (0..gradient.len())
+        .max_by(|&a, &b| gradient[a].abs().total_cmp(&gradient[b].abs()))
+        .unwrap_or(0);
+    let block = 3 * (d / 3);
+    let mut parts = Vec::new();
+    for &t in terms {
+        let mut g = vec![0.0; gradient.len()];
+        let mut assembler = crate::energy::assembly::Assembler::default();
+        assembler.assemble(&[t], state, dofs, crate::energy::EvalMode::ExactHessian, &mut g);
+        let f = [g[block] / dt, g[block + 1] / dt, g[block + 2] / dt];
+        if f.iter().any(|c| c.abs() > 1e-3 * gradient[d].abs() / dt) {
+            parts.push(format!("{} [{:.3e} {:.3e} {:.3e}]", t.name(), f[0], f[1], f[2]));
+        }
+    }
+    eprintln!("    forces at the residual's block: {}", parts.join(", "));
+}
+
 pub(super) fn largest_entry(step: &[f64], dofs: &DofMap, n_nodes: usize) -> String {
     let d = (0..step.len())
         .max_by(|&a, &b| step[a].abs().total_cmp(&step[b].abs()))
