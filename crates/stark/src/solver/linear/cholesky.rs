@@ -1,11 +1,11 @@
 //! Sparse Cholesky (faer `LLᵀ`), with the symbolic analysis (ordering, elimination tree) reused
 //! while the sparsity pattern is unchanged, the ordering reused within a time step when it
-//! changes, and the factor's values and the workspace kept between factorisations (a fresh
-//! allocation of tens of MB each time costs page faults).
+//! changes, the matrix gathered already permuted (faer would permute it at every factorisation),
+//! and the factor's values and the workspace kept between factorisations (a fresh allocation of
+//! tens of MB each time costs page faults).
 
 use super::block_sparse::BlockSparseMatrix;
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
-use faer::perm::PermRef;
 use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, LltRef, SymbolicCholesky, SymmetricOrdering};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::{Conj, MatMut, Par, Side};
@@ -22,6 +22,9 @@ struct Analysis {
     /// For each scalar lower-triangle entry (column-major order), where to read it:
     /// `(block index, entry within the block)`.
     source: Vec<(u32, u8)>,
+    /// With our own ordering the matrix is gathered already permuted (`P A Pᵀ`, so faer need
+    /// not permute it at each factorisation): the old scalar index of each new one.
+    forward: Option<Vec<usize>>,
 }
 
 /// The fill-reducing ordering: METIS's nested dissection of the block graph, each block's three
@@ -87,6 +90,30 @@ fn scalar_permutation(order: &[usize]) -> (Vec<usize>, Vec<usize>) {
     (forward, inverse)
 }
 
+/// The upper triangle's pattern (CSC, sorted rows) of a symmetric matrix given by its lower one.
+fn upper_pattern(lower: &SymbolicSparseColMat<usize>) -> SymbolicSparseColMat<usize> {
+    let n = lower.ncols();
+    let (col_ptr, row_idx) = (lower.col_ptr(), lower.row_idx());
+    // Entry (i, j), i ≥ j, of the lower triangle is entry (j, i) of the upper one: column i.
+    let mut count = vec![0usize; n + 1];
+    for &i in row_idx {
+        count[i + 1] += 1;
+    }
+    for k in 0..n {
+        count[k + 1] += count[k];
+    }
+    let mut next = count.clone();
+    let mut rows = vec![0usize; row_idx.len()];
+    // Columns j in increasing order: each upper column receives its rows sorted.
+    for j in 0..n {
+        for &i in &row_idx[col_ptr[j]..col_ptr[j + 1]] {
+            rows[next[i]] = j;
+            next[i] += 1;
+        }
+    }
+    SymbolicSparseColMat::new_checked(n, n, count, None, rows)
+}
+
 /// A direct solver that re-analyses only when the block pattern changes.
 #[derive(Default)]
 pub struct CholeskySolver {
@@ -94,6 +121,8 @@ pub struct CholeskySolver {
     values: Vec<f64>,
     /// The factor's values.
     factor: Vec<f64>,
+    /// A permuted right-hand side.
+    scratch: Vec<f64>,
     /// Workspace of the factorisation and the solve, the parallelism it was sized for and its
     /// size in bytes (kept across analyses while large enough: a fresh allocation of tens of MB
     /// costs page faults).
@@ -128,51 +157,104 @@ pub enum CholeskyError {
 impl CholeskySolver {
     fn analyse(a: &BlockSparseMatrix, pattern_id: u64, order: Option<&[usize]>) -> Result<Analysis, CholeskyError> {
         let n = a.dim();
-        // Lower triangle in CSC: column j (scalar) holds rows i ≥ j. Column j belongs to block
-        // column bc = j/3; by symmetry its entries are row j of the upper part, i.e. block row
-        // bc, block columns ≥ bc, taken transposed.
+        let blocks = a.row_start.len() - 1;
+        // The new block of each old one (the identity without an ordering of our own).
+        let mut new_of_old: Vec<usize> = (0..blocks).collect();
+        if let Some(order) = order {
+            for (new, &old) in order.iter().enumerate() {
+                new_of_old[old] = new;
+            }
+        }
+        // Lower triangle of `P A Pᵀ` in CSC: new column j (scalar) of new block column bj holds
+        // rows i ≥ j. By symmetry its entries are row j of the upper part: the old block row
+        // bc = order[bj] with its neighbours br, taken transposed.
         let mut col_ptr = Vec::with_capacity(n + 1);
         let mut row_idx = Vec::new();
         let mut source = Vec::new();
+        let mut column: Vec<(usize, (u32, u8))> = Vec::new();
         col_ptr.push(0usize);
         for j in 0..n {
-            let bc = j / 3;
-            let jj = j % 3;
+            let (bj, jj) = (j / 3, j % 3);
+            let bc = order.map_or(bj, |o| o[bj]);
+            column.clear();
             for idx in a.row_start[bc]..a.row_start[bc + 1] {
-                let br = a.cols[idx] as usize;
-                if br < bc {
+                let brn = new_of_old[a.cols[idx] as usize];
+                if brn < bj {
                     continue;
                 }
                 for ii in 0..3 {
-                    let i = 3 * br + ii;
-                    if i < j {
-                        continue;
+                    let i = 3 * brn + ii;
+                    if i >= j {
+                        // Entry (i, j) = entry (j, i) of old block (bc, br): row jj, column ii.
+                        column.push((i, (idx as u32, (3 * jj + ii) as u8)));
                     }
-                    row_idx.push(i);
-                    // Entry (i, j) = entry (j, i) of block (bc, br): row jj, column ii.
-                    source.push((idx as u32, (3 * jj + ii) as u8));
                 }
             }
+            column.sort_unstable_by_key(|e| e.0);
+            row_idx.extend(column.iter().map(|e| e.0));
+            source.extend(column.iter().map(|e| e.1));
             col_ptr.push(row_idx.len());
         }
         let symbolic_matrix = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
-        let ordering = order.map(scalar_permutation);
-        let symbolic_llt = factorize_symbolic_cholesky(
-            symbolic_matrix.as_ref(),
-            Side::Lower,
-            match &ordering {
-                Some((forward, inverse)) => SymmetricOrdering::Custom(PermRef::new_checked(forward, inverse, n)),
-                None => SymmetricOrdering::Amd,
-            },
-            Default::default(),
-        )
+        let symbolic_llt = match order {
+            // faer's analysis without an ordering reads the upper triangle whatever the side
+            // (its numeric factorisation takes the lower one as it is).
+            Some(_) => factorize_symbolic_cholesky(
+                upper_pattern(&symbolic_matrix).as_ref(),
+                Side::Upper,
+                SymmetricOrdering::Identity,
+                Default::default(),
+            ),
+            None => factorize_symbolic_cholesky(
+                symbolic_matrix.as_ref(),
+                Side::Lower,
+                SymmetricOrdering::Amd,
+                Default::default(),
+            ),
+        }
         .map_err(|e| CholeskyError::Analysis(format!("{e:?}")))?;
         Ok(Analysis {
             pattern_id,
             symbolic_matrix,
             symbolic_llt,
             source,
+            forward: order.map(|o| scalar_permutation(o).0),
         })
+    }
+
+    /// Solve with the last factor in place: `z ← (P A Pᵀ)⁻¹`-permuted, i.e. `A⁻¹ z` in the
+    /// caller's unknowns.
+    fn solve_with_factor(
+        an: &Analysis,
+        factor: &[f64],
+        z: &mut [f64],
+        scratch: &mut Vec<f64>,
+        par: Par,
+        buffer: &mut MemBuffer,
+    ) {
+        let n = z.len();
+        let llt = LltRef::new(&an.symbolic_llt, factor);
+        match &an.forward {
+            Some(forward) => {
+                scratch.clear();
+                scratch.extend(forward.iter().map(|&old| z[old]));
+                llt.solve_in_place_with_conj(
+                    Conj::No,
+                    MatMut::from_column_major_slice_mut(scratch, n, 1),
+                    par,
+                    MemStack::new(buffer),
+                );
+                for (&old, &y) in forward.iter().zip(scratch.iter()) {
+                    z[old] = y;
+                }
+            }
+            None => llt.solve_in_place_with_conj(
+                Conj::No,
+                MatMut::from_column_major_slice_mut(z, n, 1),
+                par,
+                MemStack::new(buffer),
+            ),
+        }
     }
 
     /// The last factorisation's `(L Lᵀ)⁻¹ r` into `z`, for a matrix near the one factorised (a
@@ -185,13 +267,7 @@ impl CholeskySolver {
             return false;
         }
         z.copy_from_slice(r);
-        let n = z.len();
-        LltRef::new(&an.symbolic_llt, &self.factor).solve_in_place_with_conj(
-            Conj::No,
-            MatMut::from_column_major_slice_mut(z, n, 1),
-            *par,
-            MemStack::new(buffer),
-        );
+        Self::solve_with_factor(an, &self.factor, z, &mut self.scratch, *par, buffer);
         true
     }
 
@@ -252,8 +328,7 @@ impl CholeskySolver {
             .extend(an.source.iter().map(|&(blk, e)| a.values[blk as usize][e as usize]));
         self.factor.resize(an.symbolic_llt.len_val(), 0.0);
         let mat = SparseColMatRef::new(an.symbolic_matrix.as_ref(), &self.values);
-        let llt = an
-            .symbolic_llt
+        an.symbolic_llt
             .factorize_numeric_llt(
                 &mut self.factor,
                 mat,
@@ -266,13 +341,7 @@ impl CholeskySolver {
             .map_err(|e| CholeskyError::NotPositiveDefinite(format!("{e:?}")))?;
         self.factored = true;
         x.copy_from_slice(b);
-        let n = x.len();
-        llt.solve_in_place_with_conj(
-            Conj::No,
-            MatMut::from_column_major_slice_mut(x, n, 1),
-            par,
-            MemStack::new(buffer),
-        );
+        Self::solve_with_factor(an, &self.factor, x, &mut self.scratch, par, buffer);
         Ok(())
     }
 }
