@@ -230,7 +230,9 @@ pub fn write_deformable_element_in_slots<const N: usize>(
     out: &mut [f64],
 ) {
     let width = super::term::width_of_stride(out.len());
-    out.iter_mut().for_each(|o| *o = 0.0);
+    // The value and gradient are read whole (the gradient's magnitude); of the Hessian only the
+    // blocks between the element's own slots, all written below: the rest may keep old values.
+    out[..1 + 3 * width].iter_mut().for_each(|o| *o = 0.0);
     out[0] = d.value;
     let dt2 = dt * dt;
     let base = 1 + 3 * width;

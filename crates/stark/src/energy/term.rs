@@ -69,8 +69,9 @@ pub trait EnergyTerm: Send + Sync {
     fn energy(&self, state: &EvalState) -> f64;
 
     /// Value, gradient and Hessian of element `e` in DOF space, in the layout of
-    /// [`element_stride`] (`out` has that length). Called in parallel for elements that share no
-    /// DOF block.
+    /// [`element_stride`] (`out` has that length; the gradient of a padding slot, whose stencil
+    /// entry is `NO_DOF`, must be zero, its Hessian blocks are never read). Called in parallel
+    /// for elements that share no DOF block.
     fn evaluate_element(&self, e: usize, state: &EvalState, mode: EvalMode, out: &mut [f64]);
 
     /// Called once before each time step (lagged quantities, e.g. friction, are set here).
