@@ -1,7 +1,9 @@
 //! Scene files and built-in scenes.
 
 use crate::convert::{guarded, stark_err};
-use crate::handles::{AttachmentHandle, Line, Obstacle, PrescribedHandle, SceneRigidBody, Surface, Volume};
+use crate::handles::{
+    AttachmentHandle, FixedSurface, Line, Obstacle, PrescribedHandle, SceneRigidBody, Surface, Volume,
+};
 use crate::joints::Joint;
 use crate::params;
 use crate::simulation::Simulation;
@@ -19,8 +21,8 @@ pub struct Scene {
     pub duration_s: f64,
     /// Scene name.
     pub name: String,
-    /// The objects by name: Surface, Volume, Line, Obstacle or SceneRigidBody handles (scene files
-    /// only).
+    /// The objects by name: Surface, Volume, Line, Obstacle, FixedSurface or SceneRigidBody
+    /// handles (scene files only).
     pub objects: Py<PyDict>,
     /// The `[[prescribed]]` entries in file order: dicts with `object`, `handle` and `nodes`.
     pub prescribed: Py<PyList>,
@@ -92,6 +94,7 @@ fn wrap(py: Python<'_>, scene: stark::io::LoadedScene) -> PyResult<Scene> {
             O::Volume(h) => Bound::new(py, Volume::new(id, name, h))?.into_any(),
             O::Line(h) => Bound::new(py, Line::new(id, name, h))?.into_any(),
             O::Obstacle(h) => Bound::new(py, Obstacle::new(id, name, h))?.into_any(),
+            O::FixedObstacle(h) => Bound::new(py, FixedSurface::new(id, name, h))?.into_any(),
             O::RigidBody(b) => Bound::new(py, SceneRigidBody::new(id, name, b))?.into_any(),
         };
         objects.set_item(name, handle)?;

@@ -27,3 +27,24 @@ def test_a_fixed_floor_stays_put_and_carries_a_ball(tmp_path):
     assert sim.body_position(ball)[2] == pytest.approx(0.005, abs=1e-3)
     assert np.linalg.norm(sim.body_velocity(ball)) < 1e-4
     assert sim.find_intersections() == []
+
+
+def test_a_scene_files_fixed_obstacle_is_a_fixed_surface(tmp_path):
+    path = tmp_path / "fixed.toml"
+    path.write_text("""
+duration_s = 0.05
+[settings]
+contact.default_thickness_m = 0.001
+output.frames = false
+[[obstacle]]
+name = "floor"
+grid = { size_m = [1.0, 1.0], quads = [1, 1] }
+fixed = true
+""")
+    scene = starkrs.load_scene(str(path), output_directory=str(tmp_path / "out"))
+    floor = scene.objects["floor"]
+    assert isinstance(floor, starkrs.FixedSurface)
+    sim = scene.simulation
+    start = sim.positions(floor).copy()
+    sim.run(0.05)
+    assert sim.positions(floor).tobytes() == start.tobytes()

@@ -755,9 +755,9 @@ class SceneRigidBody:
     def contact(self) -> Optional[ContactHandle]:
         """Its contact object, if it takes part in contact."""
 
-_HasNodes = Union[NodeSet, Surface, Volume, Line, Obstacle, RigidMesh, SceneRigidBody]
+_HasNodes = Union[NodeSet, Surface, Volume, Line, Obstacle, FixedSurface, RigidMesh, SceneRigidBody]
 """A node set, or any object handle with one."""
-_HasContact = Union[ContactHandle, Surface, Volume, Line, Obstacle, RigidMesh, SceneRigidBody]
+_HasContact = Union[ContactHandle, Surface, Volume, Line, Obstacle, FixedSurface, RigidMesh, SceneRigidBody]
 """A contact object, or any object handle with one."""
 _HasPrescribed = Union[PrescribedHandle, Obstacle]
 """Prescribed positions, or an obstacle."""
@@ -1385,7 +1385,7 @@ class Scene:
     def name(self) -> str:
         """Scene name."""
     @property
-    def objects(self) -> dict[str, Union[Surface, Volume, Line, Obstacle, SceneRigidBody]]:
+    def objects(self) -> dict[str, Union[Surface, Volume, Line, Obstacle, FixedSurface, SceneRigidBody]]:
         """The objects by name (scene files only)."""
     @property
     def prescribed(self) -> list[dict[str, Any]]:

@@ -157,8 +157,8 @@ pub(super) fn build(
         objects.push((e.name.clone(), SceneObject::Line(h)));
     }
     for (i, e) in file.obstacle.iter().enumerate() {
-        let h = build_obstacle(&mut sim, ctx, base_dir, &At::entry("obstacle", i), e)?;
-        objects.push((e.name.clone(), SceneObject::Obstacle(h)));
+        let object = build_obstacle(&mut sim, ctx, base_dir, &At::entry("obstacle", i), e)?;
+        objects.push((e.name.clone(), object));
     }
     let mut joints = Vec::new();
     // Bodies with `spawn` are added during the run (after the friction entries are known).

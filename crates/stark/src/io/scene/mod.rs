@@ -97,7 +97,7 @@ pub use rigid_bodies::SceneRigidBody;
 use crate::contact::ContactHandle;
 use crate::deformables::{AttachmentHandle, NodeSetHandle};
 use crate::error::Result;
-use crate::presets::{LineHandle, ObstacleHandle, SurfaceHandle, VolumeHandle};
+use crate::presets::{FixedSurfaceHandle, LineHandle, ObstacleHandle, SurfaceHandle, VolumeHandle};
 use crate::rigidbodies::joints::JointHandle;
 use crate::settings::Settings;
 use crate::simulation::Simulation;
@@ -160,6 +160,8 @@ pub enum SceneObject {
     Line(LineHandle),
     /// An `[[obstacle]]`.
     Obstacle(ObstacleHandle),
+    /// An `[[obstacle]]` with `fixed = true`.
+    FixedObstacle(FixedSurfaceHandle),
     /// A `[[rigid_body]]`.
     RigidBody(SceneRigidBody),
 }
@@ -172,6 +174,7 @@ impl SceneObject {
             SceneObject::Volume(h) => h.nodes,
             SceneObject::Line(h) => h.nodes,
             SceneObject::Obstacle(h) => h.nodes,
+            SceneObject::FixedObstacle(h) => h.nodes,
             SceneObject::RigidBody(h) => h.nodes,
         }
     }
@@ -183,6 +186,7 @@ impl SceneObject {
             SceneObject::Volume(_) => "volume",
             SceneObject::Line(_) => "line",
             SceneObject::Obstacle(_) => "obstacle",
+            SceneObject::FixedObstacle(_) => "fixed obstacle",
             SceneObject::RigidBody(_) => "rigid body",
         }
     }
@@ -194,6 +198,7 @@ impl SceneObject {
             SceneObject::Volume(h) => h.contact,
             SceneObject::Line(h) => h.contact,
             SceneObject::Obstacle(h) => Some(h.contact),
+            SceneObject::FixedObstacle(h) => Some(h.contact),
             SceneObject::RigidBody(h) => h.contact,
         }
     }

@@ -1,5 +1,6 @@
 //! `[[obstacle]]` entries: kinematic triangle surfaces whose nodes follow prescribed targets
-//! ([`Simulation::add_prescribed_surface`]), optionally moved by a [`Motion`].
+//! ([`Simulation::add_prescribed_surface`]), optionally moved by a [`Motion`], or with `fixed =
+//! true` surfaces fixed in the world ([`Simulation::add_fixed_surface`]).
 
 use super::errors::{At, Ctx, Res};
 use super::events::Motion;
@@ -7,7 +8,7 @@ use super::geometry::{
     check_positive, inline_shape, mesh_path, one_geometry, place, shape_error, BoxGenerator, CylinderGenerator,
     Geometry, Rotate, SphereGenerator, SurfaceGrid,
 };
-use crate::presets::ObstacleHandle;
+use super::SceneObject;
 use crate::rigidbodies::Shape;
 use crate::simulation::Simulation;
 use nalgebra::Vector3;
@@ -36,6 +37,8 @@ pub(super) struct ObstacleEntry {
     contact_thickness_m: Option<f64>,
     stiffness: Option<f64>,
     motion: Option<Motion>,
+    #[serde(default)]
+    fixed: bool,
 }
 
 /// The geometry sources of an obstacle: a closed shape, a mesh file, or a flat grid.
@@ -50,7 +53,7 @@ pub(super) fn build_obstacle(
     base_dir: &Path,
     at: &At,
     e: &ObstacleEntry,
-) -> Res<ObstacleHandle> {
+) -> Res<SceneObject> {
     let shape = |s: Option<Shape>| s.map(ObstacleSource::Shape);
     let geometry = one_geometry(
         ctx,
@@ -94,6 +97,20 @@ pub(super) fn build_obstacle(
         ));
     };
     check_positive(ctx, at, "contact_thickness_m", thickness, "m")?;
+    if e.fixed {
+        for (field, given) in [("stiffness", e.stiffness.is_some()), ("motion", e.motion.is_some())] {
+            if given {
+                return Err(ctx.err(
+                    &at.key(field),
+                    format!("obstacle '{}' is fixed (`fixed = true`): it has no `{field}`", e.name),
+                ));
+            }
+        }
+        let handle = sim
+            .add_fixed_surface(&e.name, &vertices, &triangles, thickness)
+            .map_err(|err| ctx.stark(&at.key(key), err))?;
+        return Ok(SceneObject::FixedObstacle(handle));
+    }
     let stiffness = e.stiffness.unwrap_or(DEFAULT_OBSTACLE_STIFFNESS);
     check_positive(ctx, at, "stiffness", stiffness, "N/m")?;
     if let Some(motion) = &e.motion {
@@ -110,5 +127,5 @@ pub(super) fn build_obstacle(
             m.apply(sim, handle.prescribed, t)
         });
     }
-    Ok(handle)
+    Ok(SceneObject::Obstacle(handle))
 }

@@ -109,6 +109,12 @@ pub(super) fn build_prescribed(
     e: &PrescribedEntry,
 ) -> Res<ScenePrescribed> {
     let object = find_object(ctx, &at.key("object"), objects, &e.object)?;
+    if let SceneObject::FixedObstacle(_) = object {
+        return Err(ctx.err(
+            &at.key("object"),
+            format!("'{}' is a fixed obstacle: its nodes never move", e.object),
+        ));
+    }
     if let SceneObject::Obstacle(_) = object {
         return Err(ctx.err(
             &at.key("object"),

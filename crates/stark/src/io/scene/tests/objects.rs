@@ -539,3 +539,57 @@ fn every_documented_scene_loads() {
         parse_scene_with(b, "doc.toml", Path::new("."), quiet).unwrap_or_else(|e| panic!("{e}\n{b}"));
     }
 }
+
+/// `fixed = true`: an obstacle fixed in the world, whose nodes are no unknowns and never move; a
+/// `stiffness` or `motion` on it, or prescribing its nodes, is an error naming the field.
+#[test]
+fn fixed_obstacles_stay_put_and_refuse_motion() {
+    let text = r#"
+duration_s = 0.1
+[settings]
+contact.default_thickness_m = 0.001
+time_step_s = 0.01
+[[surface]]
+name = "sheet"
+grid = { size_m = [0.2, 0.2], quads = [2, 2] }
+translate_m = [0.0, 0.0, 0.003]
+material = "cotton_fabric"
+[[obstacle]]
+name = "floor"
+grid = { size_m = [1.0, 1.0], quads = [1, 1] }
+fixed = true
+[[friction]]
+objects = ["sheet", "floor"]
+mu = 0.5
+"#;
+    let mut scene = parse(text);
+    let Some(SceneObject::FixedObstacle(floor)) = scene.object("floor").copied() else {
+        panic!("'floor' is not a fixed obstacle")
+    };
+    assert_eq!(scene.object("floor").unwrap().kind(), "fixed obstacle");
+    let sheet = surface(&scene, "sheet");
+    let sim = &mut scene.simulation;
+    let start = bits(sim.positions(floor.nodes));
+    for _ in 0..10 {
+        sim.step().unwrap();
+        assert_eq!(bits(sim.positions(floor.nodes)), start);
+    }
+    // The sheet's 9 nodes are the only unknowns; it came down onto the floor.
+    assert_eq!(sim.summary().unknowns, 27);
+    assert!(sim.positions(sheet.nodes).iter().all(|p| p.z < 0.003 && p.z > 0.0));
+
+    let e = parse_err(&text.replace("fixed = true", "fixed = true\nstiffness = 1e5")).to_string();
+    assert!(
+        e.contains("obstacle 'floor' is fixed (`fixed = true`): it has no `stiffness`"),
+        "{e}"
+    );
+    let moving = text.replace(
+        "fixed = true",
+        "fixed = true\nmotion = { center_m = [0.0, 0.0, 0.0], velocity_m_s = [0.1, 0.0, 0.0] }",
+    );
+    let e = parse_err(&moving).to_string();
+    assert!(e.contains("it has no `motion`"), "{e}");
+    let prescribed = format!("{text}[[prescribed]]\nobject = \"floor\"\nall = true\n");
+    let e = parse_err(&prescribed).to_string();
+    assert!(e.contains("'floor' is a fixed obstacle: its nodes never move"), "{e}");
+}
