@@ -337,7 +337,7 @@ impl Simulation {
         thickness_m: f64,
         stiffness: f64,
     ) -> Result<ObstacleHandle> {
-        let nodes = self.add_nodes(label, vertices)?;
+        let (nodes, contact) = self.add_obstacle_surface(label, vertices, triangles, thickness_m)?;
         let all: Vec<usize> = (0..vertices.len()).collect();
         let params = PrescribedParams {
             stiffness,
@@ -347,13 +347,6 @@ impl Simulation {
             .deformables
             .prescribed
             .add(&self.nodes, nodes, label, &all, params)?;
-        let edges = mesh::edges_from_triangles(triangles);
-        let contact = self
-            .register_contact(label, nodes, triangles, &edges, &all, Some(thickness_m))?
-            .expect("thickness given");
-        self.contact.disable_collision(contact, contact)?;
-        self.output
-            .add_mesh(label, nodes, OutputCells::Triangles(triangles.to_vec()));
         Ok(ObstacleHandle {
             nodes,
             prescribed,
@@ -374,6 +367,21 @@ impl Simulation {
         triangles: &[[usize; 3]],
         thickness_m: f64,
     ) -> Result<FixedSurfaceHandle> {
+        let (nodes, contact) = self.add_obstacle_surface(label, vertices, triangles, thickness_m)?;
+        for i in nodes.range() {
+            self.nodes.body[i] = FIXED_NODE;
+        }
+        Ok(FixedSurfaceHandle { nodes, contact })
+    }
+
+    /// An obstacle's nodes, its contact object (no self-collision) and its output mesh.
+    fn add_obstacle_surface(
+        &mut self,
+        label: &str,
+        vertices: &[Vector3<f64>],
+        triangles: &[[usize; 3]],
+        thickness_m: f64,
+    ) -> Result<(NodeSetHandle, ContactHandle)> {
         let nodes = self.add_nodes(label, vertices)?;
         let all: Vec<usize> = (0..vertices.len()).collect();
         let edges = mesh::edges_from_triangles(triangles);
@@ -381,12 +389,9 @@ impl Simulation {
             .register_contact(label, nodes, triangles, &edges, &all, Some(thickness_m))?
             .expect("thickness given");
         self.contact.disable_collision(contact, contact)?;
-        for i in nodes.range() {
-            self.nodes.body[i] = FIXED_NODE;
-        }
         self.output
             .add_mesh(label, nodes, OutputCells::Triangles(triangles.to_vec()));
-        Ok(FixedSurfaceHandle { nodes, contact })
+        Ok((nodes, contact))
     }
 
     /// Prescribe the nodes of `set` inside the axis-aligned box of `center` and full `size` (m).
