@@ -509,7 +509,7 @@ pub fn soft_cubes(mut settings: Settings) -> Result<Simulation> {
     settings.contact.default_thickness_m = Some(0.001);
     let mut sim = Simulation::new(settings)?;
     let floor = meshes::triangle_grid([0.0, 0.0], [2.0, 2.0], [1, 1], 0.0);
-    let floor = sim.add_prescribed_surface("floor", &floor.vertices, &floor.elements, 0.001, 1e6)?;
+    let floor = sim.add_fixed_surface("floor", &floor.vertices, &floor.elements, 0.001)?;
     let mut rubber = VolumeMaterial::soft_rubber();
     rubber.strain.youngs_modulus = 1e5;
     let side = 0.1;
@@ -643,7 +643,7 @@ pub const TOWEL_BOX_DURATION_S: f64 = 0.05;
 /// on part of it. As in the paper's robot experiment: d̂ = 3.25 mm (contact thickness 1.625 mm
 /// per side), dt = 5 ms, residual 1e-6 N; Neo-Hookean membrane E = 1.5e4 Pa at h = 3.25 mm
 /// (E·h ≈ 50 N/m), ν = 0.3, bending 5e-6, 0.5 kg/m²; friction towel–towel 0.4, towel–floor 1.0,
-/// box–towel 0.4. The floor is a prescribed (kinematic) box whose top is `d̂` below the towel's
+/// box–towel 0.4. The floor is a box fixed in the world whose top is `d̂` below the towel's
 /// lowest vertex, so the towel drops onto it within the first steps.
 pub fn towel_box(mut settings: Settings) -> Result<Simulation> {
     let dhat = 3.25e-3;
@@ -694,7 +694,7 @@ pub fn towel_box(mut settings: Settings) -> Result<Simulation> {
     for v in &mut floor.vertices {
         *v += Vector3::new(x_mid, y_mid, z_min - dhat - floor_size.z / 2.0);
     }
-    let floor = sim.add_prescribed_surface("floor", &floor.vertices, &floor.elements, thickness, 1e6)?;
+    let floor = sim.add_fixed_surface("floor", &floor.vertices, &floor.elements, thickness)?;
     let towel_contact = towel.contact.expect("towel has a contact thickness");
     sim.contact.set_friction(towel_contact, towel_contact, 0.4)?;
     sim.contact.set_friction(towel_contact, floor.contact, 1.0)?;
