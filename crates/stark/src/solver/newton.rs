@@ -217,26 +217,39 @@ struct FarFromSolution {
     on: bool,
     /// Residual above which the switch stays on, N (infinite: no such bound).
     hold_above_n: f64,
+    /// Full steps taken since the switch was forced on.
+    held_full_steps: usize,
 }
+
+/// Full steps after which a forced definite form is given up even above its residual bound: the
+/// definite form only bounds the barriers' negative curvature, and where the solution needs it
+/// Newton on the definite model circles at a constant residual (a soft box under a block: 38
+/// iterations between 0.3 and 1.3 N, two nodes taking turns).
+const MAX_HELD_FULL_STEPS: usize = 3;
 
 impl FarFromSolution {
     fn new(on: bool) -> Self {
         Self {
             on,
             hold_above_n: f64::INFINITY,
+            held_full_steps: 0,
         }
     }
 
-    /// On, until a full step at a residual below `residual_n`.
+    /// On, until a full step at a residual below `residual_n` (or a few full steps).
     fn hold_until_residual(&mut self, residual_n: f64) {
         self.on = true;
         self.hold_above_n = residual_n;
+        self.held_full_steps = 0;
     }
 
     /// After a step of fraction `alpha` accepted at `residual_n`: whether the switch flipped.
     fn after_step(&mut self, alpha: f64, residual_n: f64) -> bool {
+        if self.on && alpha == 1.0 && self.hold_above_n.is_finite() {
+            self.held_full_steps += 1;
+        }
         let next = if self.on {
-            alpha < 1.0 || residual_n >= self.hold_above_n
+            alpha < 1.0 || (residual_n >= self.hold_above_n && self.held_full_steps < MAX_HELD_FULL_STEPS)
         } else {
             alpha < 0.25
         };
