@@ -47,7 +47,7 @@ pub(super) fn bench(
         scenes
     };
     println!(
-        "{:<22} {:>3} {:>6} {:>9} {:>9} {:>9} {:>7} {:>6} {:>6} {:>5} {:>5} {:>6} {:>5} {:>9}",
+        "{:<22} {:>3} {:>6} {:>9} {:>9} {:>9} {:>7} {:>6} {:>6} {:>5} {:>5} {:>6} {:>5} {:>6} {:>9}",
         "scene",
         "thr",
         "steps",
@@ -61,6 +61,7 @@ pub(super) fn bench(
         "eval%",
         "solve%",
         "ls%",
+        "step%",
         "original"
     );
     let mut results = Vec::new();
@@ -80,7 +81,7 @@ pub(super) fn bench(
                 .map(|w| format!("{w:.1} s {:.2}x", w / s.wall_time_s))
                 .unwrap_or_else(|| "-".into());
             println!(
-                "{:<22} {:>3} {:>6} {:>9.2} {:>9.3} {:>9.2} {:>7.1} {:>6.0} {:>7.0} {:>5.0} {:>5.0} {:>6.0} {:>5.0} {:>9}",
+                "{:<22} {:>3} {:>6} {:>9.2} {:>9.3} {:>9.2} {:>7.1} {:>6.0} {:>7.0} {:>5.0} {:>5.0} {:>6.0} {:>5.0} {:>6.0} {:>9}",
                 name,
                 t,
                 s.steps,
@@ -94,6 +95,7 @@ pub(super) fn bench(
                 100.0 * tt.evaluation_s / total,
                 100.0 * tt.linear_solve_s / total,
                 100.0 * tt.line_search_s / total,
+                100.0 * (tt.step_start_s + tt.step_end_s) / total,
                 original
             );
             results

@@ -86,12 +86,14 @@ pub(super) fn print_summary(s: &RunSummary, out: &std::path::Path) {
     let total = t.total_s().max(1e-12);
     println!(
         "time per phase        evaluation {:.0}%, linear solve {:.0}%, line search {:.0}%, contact detection {:.0}%, \
-         CCD {:.0}%",
+         CCD {:.0}%, step start {:.0}%, step end {:.0}%",
         100.0 * t.evaluation_s / total,
         100.0 * t.linear_solve_s / total,
         100.0 * t.line_search_s / total,
         100.0 * t.prepare_s / total,
-        100.0 * t.ccd_s / total
+        100.0 * t.ccd_s / total,
+        100.0 * t.step_start_s / total,
+        100.0 * t.step_end_s / total
     );
     if s.max_active_pairs > 0 {
         println!(

@@ -76,6 +76,19 @@ impl Contact {
         c
     }
 
+    /// A fingerprint of what the candidates depend on besides positions: the primitives, the
+    /// objects' thicknesses and which pairs of objects collide.
+    pub(super) fn candidate_config(&self) -> u64 {
+        use std::hash::{Hash, Hasher};
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        (self.points.len(), self.edges.len(), self.triangles.len()).hash(&mut h);
+        for o in &self.objects {
+            o.thickness_m.to_bits().hash(&mut h);
+        }
+        self.enabled.hash(&mut h);
+        h.finish()
+    }
+
     /// Candidates covering the segment `from → to`: the cached ones if every contact point stays
     /// within their margin on it, else a new broad phase over the segment with a margin of the
     /// largest thickness (so the next, shorter Newton steps usually reuse it).
@@ -96,7 +109,10 @@ impl Contact {
 }
 
 /// Candidate pairs (indices into the contact points, edges and triangles), valid while every
-/// contact point stays within `margin_m` of the box it `swept` when they were found.
+/// contact point stays within `margin_m` of the box it `swept` when they were found. Both lists
+/// are sorted (the BVH's pairs are; edge pairs as `(lower, higher)`), so the pairs found from
+/// any candidates that cover a state come in one order: a run resumed from a checkpoint, whose
+/// first broad phase is new, evaluates its pairs in the order of the run that kept its cache.
 #[derive(Default)]
 pub(super) struct Candidates {
     pub(super) point_triangle: Vec<(u32, u32)>,

@@ -196,6 +196,8 @@ pub struct Contact {
     ccd_record: (f64, usize),
     /// Candidates of the last line-search segment or detection (reused while they cover it).
     candidate_cache: Option<Candidates>,
+    /// `candidate_config()` when the cached candidates were found.
+    candidate_config: u64,
     /// Primitives of rigid bodies' meshes and of the other objects (set in `before_step`), for
     /// the intersection test of trial states.
     rigid_split: RigidSplit,
@@ -231,6 +233,7 @@ impl Default for Contact {
             object_masses_kg: vec![],
             ccd_record: (1.0, 0),
             candidate_cache: None,
+            candidate_config: 0,
             rigid_split: RigidSplit::default(),
             validity_record: (0, 0, 0.0),
             version: 0,

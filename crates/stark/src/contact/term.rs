@@ -138,8 +138,13 @@ impl EnergyTerm for Contact {
         }
     }
     fn before_step(&mut self, state: &EvalState) {
-        // Objects, thicknesses or enabled pairs may have changed since the last step.
-        self.candidate_cache = None;
+        // The last step's candidates serve while they cover the positions, unless objects,
+        // thicknesses or enabled pairs changed since.
+        let config = self.candidate_config();
+        if config != self.candidate_config {
+            self.candidate_cache = None;
+            self.candidate_config = config;
+        }
         self.rigid_split = self.split_rigid(state);
         self.validity_record = (0, 0, 0.0);
         if self.relag_pending {

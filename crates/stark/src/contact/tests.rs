@@ -168,3 +168,97 @@ fn deformable_crossings_are_left_to_ccd_and_scenes_without_bodies_pay_nothing() 
     assert!(sim.contact.rigid_split.is_empty());
     assert_eq!(sim.contact.validity_record.0, 0, "no test ran");
 }
+
+/// An `n × n` grid of squares (two triangles each), `size` wide at height `z`, slightly
+/// wavy so that its vertices meet the other grid's triangles, edges and vertices.
+fn wavy_grid(n: usize, size: f64, z: f64, phase: f64) -> (Vec<Vector3<f64>>, Vec<[usize; 3]>) {
+    let h = size / n as f64;
+    let mut x = Vec::new();
+    for j in 0..=n {
+        for i in 0..=n {
+            let (u, v) = (i as f64 * h, j as f64 * h);
+            let wave = 2e-4 * (7.0 * u + phase).sin() * (5.0 * v).cos();
+            x.push(Vector3::new(u + phase * 0.3 * h, v + phase * 0.2 * h, z + wave));
+        }
+    }
+    let id = |i: usize, j: usize| j * (n + 1) + i;
+    let mut t = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+            t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+        }
+    }
+    (x, t)
+}
+
+/// The pairs found at a state come in one order whichever broad phase found the candidates (a
+/// new one, or one cached from a sweep that covers the state): a resumed run, whose first broad
+/// phase is new, sums its pairs in the order of the run that kept its cache. And candidates
+/// cached across steps are dropped when a thickness changes.
+#[test]
+fn pairs_come_in_one_order_from_any_covering_candidates() {
+    let mut settings = Settings::default();
+    settings.contact.default_thickness_m = Some(1e-3);
+    let mut sim = Simulation::new(settings).unwrap();
+    let (xa, ta) = wavy_grid(12, 0.3, 0.0, 0.0);
+    let (xb, tb) = wavy_grid(12, 0.3, 1.2e-3, 1.0);
+    sim.add_prescribed_surface("a", &xa, &ta, 1e-3, 1e4).unwrap();
+    sim.add_prescribed_surface("b", &xb, &tb, 1e-3, 1e4).unwrap();
+    let x = sim.nodes.x.clone();
+    let key = |pairs: &[super::ContactPair]| pairs.iter().map(|p| (p.kind, p.nodes)).collect::<Vec<_>>();
+
+    let fresh = at_rest(&mut sim, |contact, _| {
+        contact.candidate_cache = None;
+        contact.detect(&x)
+    });
+    let point_triangle = fresh
+        .iter()
+        .filter(|p| p.kind == super::pairs::PairKind::PointTriangle)
+        .count();
+    let edge_edge = fresh
+        .iter()
+        .filter(|p| p.kind == super::pairs::PairKind::EdgeEdge)
+        .count();
+    assert!(
+        point_triangle > 100 && edge_edge > 100,
+        "{point_triangle} point–triangle, {edge_edge} edge–edge pairs"
+    );
+    // Candidates of a sweep from a shifted, rotated state into `x`: other boxes, another BVH.
+    let mut from = x.clone();
+    for (i, p) in from.iter_mut().enumerate() {
+        *p =
+            Vector3::new(0.3 - p.x, 0.3 - p.y, p.z) + Vector3::new(3e-3 * (i as f64).sin(), 0.0, 1e-3 * (i % 3) as f64);
+    }
+    let swept = at_rest(&mut sim, |contact, _| {
+        contact.candidate_cache = None;
+        let c = contact.candidates_for(None, &from, &x);
+        contact.candidate_cache = Some(c);
+        contact.detect(&x)
+    });
+    assert_eq!(key(&swept), key(&fresh));
+
+    // A thicker object: the next step's detection finds the pairs of its larger d̂ (the
+    // candidates cached at the smaller one would miss them).
+    let mut sim = Simulation::new(sim.settings.clone()).unwrap();
+    sim.add_prescribed_surface("a", &xa, &ta, 1e-3, 1e4).unwrap();
+    let (xb, tb) = wavy_grid(12, 0.3, 4.5e-3, 1.0);
+    let b = sim.add_prescribed_surface("b", &xb, &tb, 1e-3, 1e4).unwrap();
+    let x = sim.nodes.x.clone();
+    let before = at_rest(&mut sim, |contact, state| {
+        contact.before_step(state);
+        contact.detect(&x).len()
+    });
+    sim.contact.set_thickness(b.contact, 4e-3).unwrap();
+    let after = at_rest(&mut sim, |contact, state| {
+        contact.before_step(state);
+        contact.detect(&x).len()
+    });
+    let new = at_rest(&mut sim, |contact, _| {
+        contact.candidate_cache = None;
+        contact.detect(&x).len()
+    });
+    assert_eq!(before, 0);
+    assert!(after > 100, "{after} pairs at the larger thickness");
+    assert_eq!(after, new);
+}

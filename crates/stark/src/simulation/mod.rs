@@ -163,7 +163,7 @@ pub struct Simulation {
     velocities: Vec<Vector3<f64>>,
     scratch_x: Vec<Vector3<f64>>,
     scratch_poses: Vec<BodyPose>,
-    pool: Option<rayon::ThreadPool>,
+    pool: Option<std::sync::Arc<rayon::ThreadPool>>,
     summary: RunSummary,
     started: bool,
     /// While `run` runs: its end time, so that the last step is shortened to land on it.
@@ -179,12 +179,12 @@ impl Simulation {
     pub fn new(settings: Settings) -> Result<Self> {
         settings.validate()?;
         let pool = if settings.threads > 0 {
-            Some(
+            Some(std::sync::Arc::new(
                 rayon::ThreadPoolBuilder::new()
                     .num_threads(settings.threads)
                     .build()
                     .map_err(|e| StarkError::InvalidInput(format!("cannot start {} threads: {e}", settings.threads)))?,
-            )
+            ))
         } else {
             None
         };

@@ -64,7 +64,6 @@ pub(super) struct StepParts<'a> {
     scratch_x: &'a mut Vec<Vector3<f64>>,
     scratch_poses: &'a mut Vec<BodyPose>,
     newton: &'a mut NewtonWorkspace,
-    pool: &'a Option<rayon::ThreadPool>,
 }
 
 impl Simulation {
@@ -82,7 +81,6 @@ impl Simulation {
             velocities,
             scratch_x,
             scratch_poses,
-            pool,
             ..
         } = self;
         let mut terms = deformables.terms_mut();
@@ -99,7 +97,6 @@ impl Simulation {
             scratch_x,
             scratch_poses,
             newton,
-            pool,
         }
     }
 
@@ -145,6 +142,16 @@ impl Simulation {
     /// needed). Each attempt is prepared, solved and checked; the first that passes is committed
     /// and recorded.
     pub fn step(&mut self) -> Result<StepReport> {
+        // Everything parallel in the step (lagged quantities, contact detection, the solve, the
+        // checks and end-of-step updates) runs in the simulation's pool, so `threads` bounds it
+        // and no work wakes rayon's global pool.
+        match self.pool.clone() {
+            Some(pool) => pool.install(|| self.step_in_pool()),
+            None => self.step_in_pool(),
+        }
+    }
+
+    fn step_in_pool(&mut self) -> Result<StepReport> {
         self.start()?;
         let wall = Instant::now();
         let mut tally = StepTally::default();
@@ -159,8 +166,10 @@ impl Simulation {
             };
             tally.times.add(&report.times);
             tally.newton_iterations += report.iterations;
+            let checked = Instant::now();
             let retry = self.check_attempt(&attempt);
             if !retry.is_empty() {
+                tally.times.step_end_s += checked.elapsed().as_secs_f64();
                 tally.hardening_retries += 1;
                 self.summary.hardening_retries += 1;
                 if tally.hardening_retries > self.settings.max_hardening_retries {
@@ -175,6 +184,7 @@ impl Simulation {
                 continue;
             }
             self.commit_attempt(&attempt);
+            tally.times.step_end_s += checked.elapsed().as_secs_f64();
             self.fire_spawns(self.time, true)?;
             // A shortened last step leaves dt as it was (the run may continue).
             if self.settings.adaptive_time_step && !attempt.shortened {
@@ -222,7 +232,6 @@ impl Simulation {
             bodies,
             velocities,
             newton,
-            pool,
             ..
         } = self.parts();
         let problem = StepProblem {
@@ -232,24 +241,20 @@ impl Simulation {
             time: attempt.t_end,
             gravity: attempt.gravity,
         };
-        // Everything parallel in the step (lagged quantities, contact detection, the solve) runs
-        // in the simulation's pool, so `threads` bounds it.
-        let mut step = || {
-            // Lagged quantities are taken at the start of the step (v = 0, x = x0).
-            {
-                let zeros = vec![Vector3::zeros(); dof_blocks(nodes, bodies)];
-                let poses = rest_poses(bodies, attempt.dt);
-                let state = attempt.state(nodes, bodies, &zeros, &nodes.x, &poses);
-                for t in terms.iter_mut() {
-                    t.before_step(&state);
-                }
+        // Lagged quantities are taken at the start of the step (v = 0, x = x0).
+        let lagged = Instant::now();
+        {
+            let zeros = vec![Vector3::zeros(); dof_blocks(nodes, bodies)];
+            let poses = rest_poses(bodies, attempt.dt);
+            let state = attempt.state(nodes, bodies, &zeros, &nodes.x, &poses);
+            for t in terms.iter_mut() {
+                t.before_step(&state);
             }
-            newton::solve(newton, &mut terms, &problem, velocities, &settings.newton)
-        };
-        match pool {
-            Some(p) => p.install(step),
-            None => step(),
         }
+        let step_start_s = lagged.elapsed().as_secs_f64();
+        let mut report = newton::solve(newton, &mut terms, &problem, velocities, &settings.newton)?;
+        report.times.step_start_s = step_start_s;
+        Ok(report)
     }
 
     /// Place the nodes and bodies at the converged velocities (into the scratch positions and

@@ -50,6 +50,14 @@ pub struct PhaseTimes {
     /// Largest safe step fractions: continuous collision detection (and its broad phase when the
     /// cached candidates no longer cover the step).
     pub ccd_s: f64,
+    /// The terms' quantities lagged at the start of each attempt (friction's contact detection
+    /// and normal forces), outside Newton.
+    #[serde(default)]
+    pub step_start_s: f64,
+    /// After Newton: the terms' checks of the converged attempt (friction re-lagging), the
+    /// commit and the terms' end-of-step updates (not the logs and frames written).
+    #[serde(default)]
+    pub step_end_s: f64,
 }
 
 impl PhaseTimes {
@@ -60,11 +68,19 @@ impl PhaseTimes {
         self.linear_solve_s += o.linear_solve_s;
         self.line_search_s += o.line_search_s;
         self.ccd_s += o.ccd_s;
+        self.step_start_s += o.step_start_s;
+        self.step_end_s += o.step_end_s;
     }
 
     /// Sum of all phases, s.
     pub fn total_s(&self) -> f64 {
-        self.prepare_s + self.evaluation_s + self.linear_solve_s + self.line_search_s + self.ccd_s
+        self.prepare_s
+            + self.evaluation_s
+            + self.linear_solve_s
+            + self.line_search_s
+            + self.ccd_s
+            + self.step_start_s
+            + self.step_end_s
     }
 }
 
