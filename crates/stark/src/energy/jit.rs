@@ -181,12 +181,13 @@ pub fn compile(traced: &TracedEnergy) -> Result<Arc<JitKernel>> {
         }
     }
     let kernel = Arc::new(compile_uncached(traced, cache_dir())?);
-    memory_cache()
-        .lock()
-        .unwrap_or_else(|e| e.into_inner())
-        .entry(hash)
-        .or_default()
-        .push((traced.clone(), kernel.clone()));
+    let mut cache = memory_cache().lock().unwrap_or_else(|e| e.into_inner());
+    let same = cache.entry(hash).or_default();
+    // Another thread may have compiled the same energy meanwhile: one kernel per energy.
+    if let Some((_, k)) = same.iter().find(|(t, _)| t == traced) {
+        return Ok(k.clone());
+    }
+    same.push((traced.clone(), kernel.clone()));
     Ok(kernel)
 }
 
