@@ -40,7 +40,8 @@ impl Contact {
         // A cheap conservative filter first: the distance of a pair can shrink by at most the sum
         // of the largest displacements of its two sides, so a pair farther apart than that
         // cannot collide within the step.
-        let disp = |i: u32| (to[i as usize] - from[i as usize]).norm();
+        let displacement: Vec<f64> = from.par_iter().zip(to).map(|(a, b)| (b - a).norm()).collect();
+        let disp = |i: u32| displacement[i as usize];
         let (a_pt, q_pt) = c
             .point_triangle
             .par_iter()
