@@ -620,6 +620,29 @@ mod tests {
         );
     }
 
+    /// A step writes at most one frame: frame times it passed over (a step longer than the
+    /// frame interval, or frames switched on after steps without, as when a run resumes with
+    /// frames from a checkpoint written without) are skipped, not written as copies of its state.
+    #[test]
+    fn a_step_writes_at_most_one_frame() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut sim = pendulum(dir.path(), |s| {
+            s.output.fps = 60.0;
+            s.output.frames = false;
+        });
+        for _ in 0..10 {
+            sim.step().unwrap();
+        }
+        assert_eq!(sim.output.frames_written, 0);
+        sim.settings.output.frames = true;
+        sim.step().unwrap();
+        assert_eq!(sim.output.frames_written, 1, "one frame, not one per missed frame time");
+        // dt = 1/30 s at 60 frames per second: one frame per step, the next due after it.
+        sim.step().unwrap();
+        assert_eq!(sim.output.frames_written, 2);
+        assert!(sim.output.next_frame_time > sim.time());
+    }
+
     #[test]
     fn rigid_meshes_are_in_the_frames_at_the_body_pose() {
         let dir = tempfile::tempdir().unwrap();

@@ -398,9 +398,14 @@ impl Simulation {
         self.write_rigid_logs(r.step)?;
         let fps = self.settings.output.fps;
         if self.settings.output.frames && fps > 0.0 && !self.output.meshes.is_empty() {
-            while self.time >= self.output.next_frame_time - 1e-9 * self.dt {
+            if self.time >= self.output.next_frame_time - 1e-9 * self.dt {
                 self.write_frame_now()?;
-                self.output.next_frame_time += 1.0 / fps;
+                // One frame per step: frame times the step passed over (a step longer than the
+                // frame interval, or a run resumed with frames from a checkpoint written
+                // without) are skipped, not written as copies of this state.
+                while self.time >= self.output.next_frame_time - 1e-9 * self.dt {
+                    self.output.next_frame_time += 1.0 / fps;
+                }
             }
         }
         self.summary.frames = self.output.frames_written;
