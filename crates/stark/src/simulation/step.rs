@@ -397,15 +397,14 @@ impl Simulation {
         self.output.log(r)?;
         self.write_rigid_logs(r.step)?;
         let fps = self.settings.output.fps;
-        if self.settings.output.frames && fps > 0.0 && !self.output.meshes.is_empty() {
-            if self.time >= self.output.next_frame_time - 1e-9 * self.dt {
-                self.write_frame_now()?;
-                // One frame per step: frame times the step passed over (a step longer than the
-                // frame interval, or a run resumed with frames from a checkpoint written
-                // without) are skipped, not written as copies of this state.
-                while self.time >= self.output.next_frame_time - 1e-9 * self.dt {
-                    self.output.next_frame_time += 1.0 / fps;
-                }
+        let frames_on = self.settings.output.frames && fps > 0.0 && !self.output.meshes.is_empty();
+        if frames_on && self.time >= self.output.next_frame_time - 1e-9 * self.dt {
+            self.write_frame_now()?;
+            // One frame per step: frame times the step passed over (a step longer than the frame
+            // interval, or a run resumed with frames from a checkpoint written without) are
+            // skipped, not written as copies of this state.
+            while self.time >= self.output.next_frame_time - 1e-9 * self.dt {
+                self.output.next_frame_time += 1.0 / fps;
             }
         }
         self.summary.frames = self.output.frames_written;
