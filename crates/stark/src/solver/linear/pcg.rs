@@ -90,8 +90,7 @@ pub fn solve_preconditioned(
         return info;
     }
     while info.iterations < max_iterations {
-        a.mul_vec(&p, &mut ap);
-        let pap = dot(&p, &ap);
+        let pap = a.mul_vec_dot(&p, &mut ap);
         if pap <= 0.0 || !pap.is_finite() {
             info.indefinite = true;
             break;
