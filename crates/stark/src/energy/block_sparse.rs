@@ -90,19 +90,24 @@ impl BlockSparseMatrix {
         y.par_chunks_mut(3 * ROWS_PER_TASK).enumerate().for_each(|(chunk, ys)| {
             let first = chunk * ROWS_PER_TASK;
             for (k, yr) in ys.chunks_exact_mut(3).enumerate() {
-                let r = first + k;
-                let mut acc = [0.0; 3];
-                for idx in self.row_start[r]..self.row_start[r + 1] {
-                    let c = self.cols[idx] as usize;
-                    let b = &self.values[idx];
-                    let xc = &x[3 * c..3 * c + 3];
-                    acc[0] += b[0] * xc[0] + b[1] * xc[1] + b[2] * xc[2];
-                    acc[1] += b[3] * xc[0] + b[4] * xc[1] + b[5] * xc[2];
-                    acc[2] += b[6] * xc[0] + b[7] * xc[1] + b[8] * xc[2];
-                }
-                yr.copy_from_slice(&acc);
+                yr.copy_from_slice(&self.row_times(first + k, x));
             }
         });
+    }
+
+    /// Block row `r` times `x`.
+    #[inline(always)]
+    fn row_times(&self, r: usize, x: &[f64]) -> [f64; 3] {
+        let mut acc = [0.0; 3];
+        for idx in self.row_start[r]..self.row_start[r + 1] {
+            let c = self.cols[idx] as usize;
+            let b = &self.values[idx];
+            let xc = &x[3 * c..3 * c + 3];
+            acc[0] += b[0] * xc[0] + b[1] * xc[1] + b[2] * xc[2];
+            acc[1] += b[3] * xc[0] + b[4] * xc[1] + b[5] * xc[2];
+            acc[2] += b[6] * xc[0] + b[7] * xc[1] + b[8] * xc[2];
+        }
+        acc
     }
 
     /// `y = A x`, returning `x · y` (summed per task of rows, in order: the same bits at any
@@ -116,15 +121,7 @@ impl BlockSparseMatrix {
                 let mut xy = [0.0; 3];
                 for (k, yr) in ys.chunks_exact_mut(3).enumerate() {
                     let r = first + k;
-                    let mut acc = [0.0; 3];
-                    for idx in self.row_start[r]..self.row_start[r + 1] {
-                        let c = self.cols[idx] as usize;
-                        let b = &self.values[idx];
-                        let xc = &x[3 * c..3 * c + 3];
-                        acc[0] += b[0] * xc[0] + b[1] * xc[1] + b[2] * xc[2];
-                        acc[1] += b[3] * xc[0] + b[4] * xc[1] + b[5] * xc[2];
-                        acc[2] += b[6] * xc[0] + b[7] * xc[1] + b[8] * xc[2];
-                    }
+                    let acc = self.row_times(r, x);
                     yr.copy_from_slice(&acc);
                     for i in 0..3 {
                         xy[i] += x[3 * r + i] * acc[i];
