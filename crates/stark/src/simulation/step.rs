@@ -411,3 +411,68 @@ impl Simulation {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::energy::term::{EnergyTerm, EvalMode, StepCheck};
+    use crate::presets::SurfaceMaterial;
+    use crate::state::EvalState;
+    use crate::{Settings, Simulation};
+    use std::sync::{Arc, Mutex};
+
+    /// A term without elements that records the thread count its hooks run with.
+    struct ThreadProbe(Arc<Mutex<Vec<(&'static str, usize)>>>);
+
+    impl ThreadProbe {
+        fn note(&self, hook: &'static str) {
+            self.0.lock().unwrap().push((hook, rayon::current_num_threads()));
+        }
+    }
+
+    impl EnergyTerm for ThreadProbe {
+        fn name(&self) -> &str {
+            "thread probe"
+        }
+        fn num_elements(&self) -> usize {
+            0
+        }
+        fn stencil_width(&self, _state: &EvalState) -> usize {
+            1
+        }
+        fn write_stencils(&self, _state: &EvalState, _out: &mut [u32]) {}
+        fn energy(&self, _state: &EvalState) -> f64 {
+            0.0
+        }
+        fn evaluate_element(&self, _e: usize, _state: &EvalState, _mode: EvalMode, _out: &mut [f64]) {}
+        fn before_step(&mut self, _state: &EvalState) {
+            self.note("before_step");
+        }
+        fn check_converged_step(&mut self, _state: &EvalState) -> StepCheck {
+            self.note("check_converged_step");
+            StepCheck::Accept
+        }
+        fn after_step(&mut self, _state: &EvalState) {
+            self.note("after_step");
+        }
+    }
+
+    /// Every part of a step runs in the simulation's pool (`threads`), not in rayon's global one
+    /// (whose size is the machine's core count): three threads asked, three seen everywhere.
+    #[test]
+    fn the_whole_step_runs_in_the_simulations_pool() {
+        let settings = Settings {
+            threads: 3,
+            ..Default::default()
+        };
+        let mut sim = Simulation::new(settings).unwrap();
+        sim.add_surface_grid("cloth", [1.0, 1.0], [2, 2], &SurfaceMaterial::cotton_fabric())
+            .unwrap();
+        let seen = Arc::new(Mutex::new(Vec::new()));
+        sim.add_term(Box::new(ThreadProbe(seen.clone())));
+        sim.step().unwrap();
+        let seen = seen.lock().unwrap();
+        let hooks: Vec<_> = seen.iter().map(|&(h, _)| h).collect();
+        assert_eq!(hooks, ["before_step", "check_converged_step", "after_step"]);
+        assert!(seen.iter().all(|&(_, n)| n == 3), "{seen:?}");
+    }
+}

@@ -892,6 +892,39 @@ mod tests {
         }
     }
 
+    /// The definite-Hessian switch: on at the start it goes off at the first full step; forced
+    /// on, it holds until a full step below its residual bound, or for at most
+    /// `MAX_HELD_FULL_STEPS` full steps above it; cut steps neither release it nor count.
+    #[test]
+    fn a_forced_definite_form_is_released_below_its_bound_or_after_a_few_full_steps() {
+        let mut far = FarFromSolution::new(true);
+        assert!(!far.after_step(0.5, 10.0) && far.on, "a cut step keeps it");
+        assert!(far.after_step(1.0, 10.0) && !far.on, "a full step ends it");
+        far.hold_until_residual(1.0);
+        assert!(far.on);
+        assert!(
+            far.after_step(1.0, 0.5) && !far.on,
+            "a full step below the bound releases it"
+        );
+        far.hold_until_residual(1.0);
+        for _ in 0..5 {
+            far.after_step(0.5, 3.0);
+        }
+        assert!(far.on, "cut steps do not count");
+        for k in 1..MAX_HELD_FULL_STEPS {
+            far.after_step(1.0, 3.0);
+            assert!(far.on, "held after {k} full steps above the bound");
+        }
+        assert!(
+            far.after_step(1.0, 3.0) && !far.on,
+            "released after {MAX_HELD_FULL_STEPS}"
+        );
+        assert!(
+            far.after_step(0.2, 3.0) && far.on,
+            "a step cut below a quarter switches it on again"
+        );
+    }
+
     #[test]
     fn invalid_states_are_never_used_as_guess_or_iterate() {
         // The start velocity 1 m/s (the initial guess) is beyond the limit 0.3 m/s: it must be

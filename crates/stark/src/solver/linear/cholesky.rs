@@ -130,8 +130,9 @@ pub struct CholeskySolver {
     /// The last nested-dissection ordering (per block), reused by the analyses of changed
     /// patterns until [`CholeskySolver::fresh_ordering_next`] asks for a new one.
     ordering: Option<Vec<usize>>,
-    /// The block pattern `ordering` was made from.
-    ordering_pattern: Option<(Vec<usize>, Vec<u32>)>,
+    /// The `pattern_id` of the block pattern `ordering` was made from (the assembler gives an
+    /// unchanged pattern its id again, and a changed one a new id).
+    ordering_pattern_id: Option<u64>,
     /// The next analysis computes a fresh ordering. Set at each time step's start: within a
     /// step the pattern changes only by the contact pairs that appear and vanish, and the
     /// step's first ordering stays nearly as good (METIS is two thirds of an analysis), while
@@ -157,17 +158,10 @@ pub enum CholeskyError {
 }
 
 impl CholeskySolver {
-    /// Order `a`'s pattern by nested dissection, remembering the pattern.
-    fn order(&mut self, a: &BlockSparseMatrix) {
+    /// Order `a`'s pattern (`pattern_id`) by nested dissection.
+    fn order(&mut self, a: &BlockSparseMatrix, pattern_id: u64) {
         self.ordering = nested_dissection(a);
-        self.ordering_pattern = Some((a.row_start.clone(), a.cols.clone()));
-    }
-
-    /// Whether the ordering was made from `a`'s block pattern.
-    fn ordered_from(&self, a: &BlockSparseMatrix) -> bool {
-        self.ordering_pattern
-            .as_ref()
-            .is_some_and(|(rows, cols)| *rows == a.row_start && *cols == a.cols)
+        self.ordering_pattern_id = Some(pattern_id);
     }
 
     fn analyse(a: &BlockSparseMatrix, pattern_id: u64, order: Option<&[usize]>) -> Result<Analysis, CholeskyError> {
@@ -311,14 +305,14 @@ impl CholeskySolver {
         // same analysis if it was made with it, at no cost; a settled scene's contacts keep
         // their pattern from step to step).
         let mut fresh = false;
-        if std::mem::take(&mut self.fresh_ordering_next) && !self.ordered_from(a) {
-            self.order(a);
+        if std::mem::take(&mut self.fresh_ordering_next) && self.ordering_pattern_id != Some(pattern_id) {
+            self.order(a, pattern_id);
             fresh = true;
         }
         if fresh || self.analysis.as_ref().map(|an| an.pattern_id) != Some(pattern_id) {
             let blocks = a.row_start.len() - 1;
             if !fresh && self.ordering.as_ref().is_none_or(|o| o.len() != blocks) {
-                self.order(a);
+                self.order(a, pattern_id);
                 fresh = true;
             }
             let previous_len = self.factor_len();
@@ -326,7 +320,7 @@ impl CholeskySolver {
             if !fresh && analysis.symbolic_llt.len_val() as f64 > REORDER_ABOVE_FILL_GROWTH * previous_len as f64 {
                 // The new couplings do not fit the old ordering (an obstacle's nodes that now
                 // touch a whole cloth, ordered early, fill everything in): order afresh.
-                self.order(a);
+                self.order(a, pattern_id);
                 analysis = Self::analyse(a, pattern_id, self.ordering.as_deref())?;
                 fresh = true;
             }
