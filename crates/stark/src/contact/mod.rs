@@ -188,6 +188,8 @@ pub struct Contact {
     friction: Vec<f64>,
     pairs: Vec<ContactPair>,
     friction_elements: Vec<FrictionElement>,
+    /// The friction duals before a tentative acceptance (`EnergyTerm::save_iterate`).
+    saved_duals: Vec<[f64; 2]>,
     /// `κ` per pair of objects.
     kappa: PairStiffness,
     /// Mean contact mass of each object (kg; 0: kinematic), set with the stiffness.
@@ -229,6 +231,7 @@ impl Default for Contact {
             friction: vec![],
             pairs: vec![],
             friction_elements: vec![],
+            saved_duals: vec![],
             kappa: PairStiffness::default(),
             object_masses_kg: vec![],
             ccd_record: (1.0, 0),

@@ -162,11 +162,22 @@ impl EnergyTerm for Contact {
             f.update_dual(&Self::stencil_x(&f.nodes, from.x), &Self::stencil_x(&f.nodes, to.x));
         }
     }
+    fn save_iterate(&mut self) {
+        self.saved_duals.clear();
+        self.saved_duals.extend(self.friction_elements.iter().map(|f| f.dual));
+    }
+    fn restore_iterate(&mut self) {
+        for (f, &w) in self.friction_elements.iter_mut().zip(&self.saved_duals) {
+            f.dual = w;
+        }
+    }
     fn use_definite_hessian(&mut self, on: bool) -> bool {
-        let changed =
-            self.definite_barriers != on && self.settings.hessian != PairHessian::Exact && !self.pairs.is_empty();
+        let changed = self.definite_barriers != on && self.has_definite_form();
         self.definite_barriers = on;
         changed
+    }
+    fn has_definite_form(&self) -> bool {
+        self.settings.hessian != PairHessian::Exact && !self.pairs.is_empty()
     }
     fn prepare_evaluation(&mut self, state: &EvalState) {
         let pairs = self.detect(state.x);

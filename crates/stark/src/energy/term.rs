@@ -91,10 +91,25 @@ pub trait EnergyTerm: Send + Sync {
         false
     }
 
+    /// Whether [`use_definite_hessian`](Self::use_definite_hessian) can change what this term
+    /// assembles (it has such a form and pairs to use it on).
+    fn has_definite_form(&self) -> bool {
+        false
+    }
+
     /// Called when Newton accepts the iterate `to` (after the line search) coming from `from`:
     /// a term with auxiliary unknowns of its own updates them here (friction's dual
     /// variables, `contact::friction`).
     fn accept_iterate(&mut self, _from: &EvalState, _to: &EvalState) {}
+
+    /// Keep what [`accept_iterate`](Self::accept_iterate) changes, for
+    /// [`restore_iterate`](Self::restore_iterate): the line search accepts its first trial
+    /// tentatively to assemble there (the next iteration's Hessian needs the accepted duals).
+    fn save_iterate(&mut self) {}
+
+    /// Undo the [`accept_iterate`](Self::accept_iterate) calls since
+    /// [`save_iterate`](Self::save_iterate).
+    fn restore_iterate(&mut self) {}
 
     /// Called once per step after the first assembly, with the total gradient (DOF space) at
     /// `state`: a term may re-scale itself to balance the others (contact raises its barrier

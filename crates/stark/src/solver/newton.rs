@@ -261,17 +261,23 @@ impl FarFromSolution {
 
     /// After a step of fraction `alpha` accepted at `residual_n`: whether the switch flipped.
     fn after_step(&mut self, alpha: f64, residual_n: f64) -> bool {
+        let next = self.next(alpha, residual_n);
         if self.on && alpha == 1.0 && self.hold_above_n.is_finite() {
             self.held_full_steps += 1;
         }
-        let next = if self.on {
-            alpha < 1.0 || (residual_n >= self.hold_above_n && self.held_full_steps < MAX_HELD_FULL_STEPS)
-        } else {
-            alpha < 0.25
-        };
         let flipped = next != self.on;
         self.on = next;
         flipped
+    }
+
+    /// The switch after a step of fraction `alpha` accepted at `residual_n`.
+    fn next(&self, alpha: f64, residual_n: f64) -> bool {
+        if self.on {
+            let held = self.held_full_steps + (alpha == 1.0 && self.hold_above_n.is_finite()) as usize;
+            alpha < 1.0 || (residual_n >= self.hold_above_n && held < MAX_HELD_FULL_STEPS)
+        } else {
+            alpha < 0.25
+        }
     }
 }
 
@@ -460,6 +466,12 @@ pub fn solve(
     // The terms were last prepared (contact pairs detected) at the current iterate: the line
     // search prepares each trial, the accepted one included.
     let mut prepared = false;
+    // The line search assembles its first trial (value, gradient and Hessian) instead of only
+    // evaluating its energy while the last line search accepted its first trial: an accepted
+    // trial's assembly is the next iteration's, which saves the energy evaluation. The trial
+    // is accepted tentatively before (friction's duals follow the accepted iterates and enter
+    // the Hessian), and restored when the line search goes on.
+    let mut speculate = true;
     // Diagnostics: the DOF block of the residual's largest entry.
     let mut residual_at = String::new();
     for iteration in 0..settings.max_iterations {
@@ -696,10 +708,24 @@ pub fn solve(
             EvalMode::ExactHessian
         };
         let mut accepted = false;
+        let mut first_trial_accepted = false;
+        let mut evaluation_in_line_search_s = 0.0;
+        // The terms accepted the current trial tentatively (its assembly was speculative).
+        let mut tentative = false;
+        // A step this short ends the solve once accepted: nothing would use its assembly.
+        let last_step = settings.step_tolerance_m_s > 0.0 && norm_inf(&ws.step) < settings.step_tolerance_m_s;
+        let keep_speculating = speculate;
+        // Nor one after which the barriers' Hessians change form (the assembly would be stale).
+        let form_changes = settings.definite_far_from_solution
+            && definite.next(alpha, residual) != definite.on
+            && terms.iter().any(|t| t.has_definite_form());
+        speculate &= !(last_step || form_changes);
+        // The assembly of the trial just evaluated, when it was assembled.
+        let mut speculative: Option<Assembled>;
         let mut trial_residual = f64::NAN;
         // The trial energy closest to the current one (how far apart they stay as α → 0).
         let mut closest = f64::INFINITY;
-        for _ in 0..settings.max_line_search_iterations {
+        for trial_index in 0..settings.max_line_search_iterations {
             axpy_velocities(&dofs, v, &ws.step, alpha, &mut ws.trial_v);
             problem.place(&ws.trial_v, &mut ws.trial_x, &mut ws.trial_poses);
             {
@@ -715,7 +741,27 @@ pub fn solve(
                 }
             }
             let trial = problem.state(&ws.trial_v, &ws.trial_x, &ws.trial_poses);
-            let e = total_energy(terms, &trial);
+            let e = if std::mem::take(&mut speculate) {
+                let t4 = Instant::now();
+                let from = problem.state(v, &ws.x, &ws.poses);
+                for t in terms.iter_mut() {
+                    t.save_iterate();
+                    t.accept_iterate(&from, &trial);
+                }
+                tentative = true;
+                let shared: Vec<&dyn EnergyTerm> = terms.iter().map(|t| &**t as &dyn EnergyTerm).collect();
+                let done = ws.assembler.assemble(&shared, &trial, &dofs, mode, &mut ws.gradient);
+                let assembly_s = t4.elapsed().as_secs_f64();
+                report.times.evaluation_s += assembly_s;
+                // Counted as evaluation, not line search (it is the next iteration's).
+                evaluation_in_line_search_s += assembly_s;
+                let e = done.energy;
+                speculative = Some(done);
+                e
+            } else {
+                speculative = None;
+                total_energy(terms, &trial)
+            };
             report.line_search_evaluations += 1;
             closest = closest.min((e - energy).abs());
             // The expected decrease is below the energy's rounding error: the energy cannot
@@ -736,16 +782,26 @@ pub fn solve(
             }
             if e.is_finite() && armijo && (!unresolvable || e < energy - resolvable) {
                 accepted = true;
+                first_trial_accepted = trial_index == 0;
+                assembled = speculative.take();
                 break;
             }
             if e.is_finite() && unresolvable && e - energy < resolvable {
                 // Round-off regime: accept the step if it lowers the force residual. Its
                 // assembly is the next iteration's (the direction is solved already, so the
                 // gradient and matrix may be overwritten).
-                let t4 = Instant::now();
-                let shared: Vec<&dyn EnergyTerm> = terms.iter().map(|t| &**t as &dyn EnergyTerm).collect();
-                let done = ws.assembler.assemble(&shared, &trial, &dofs, mode, &mut ws.gradient);
-                report.times.evaluation_s += t4.elapsed().as_secs_f64();
+                let done = match speculative.take() {
+                    Some(done) => done,
+                    None => {
+                        let t4 = Instant::now();
+                        let shared: Vec<&dyn EnergyTerm> = terms.iter().map(|t| &**t as &dyn EnergyTerm).collect();
+                        let done = ws.assembler.assemble(&shared, &trial, &dofs, mode, &mut ws.gradient);
+                        let assembly_s = t4.elapsed().as_secs_f64();
+                        report.times.evaluation_s += assembly_s;
+                        evaluation_in_line_search_s += assembly_s;
+                        done
+                    }
+                };
                 trial_residual = norm_inf(&ws.gradient) / dt;
                 if done.energy.is_finite() && trial_residual < residual {
                     assembled = Some(done);
@@ -753,9 +809,17 @@ pub fn solve(
                     break;
                 }
             }
+            if std::mem::take(&mut tentative) {
+                for t in terms.iter_mut() {
+                    t.restore_iterate();
+                }
+            }
             alpha *= 0.5;
         }
-        report.times.line_search_s += t3.elapsed().as_secs_f64();
+        report.times.line_search_s += t3.elapsed().as_secs_f64() - evaluation_in_line_search_s;
+        // Once a first trial was cut in this step, the step's line searches only evaluate
+        // energies (a cut speculative trial costs an assembly for nothing).
+        speculate = keep_speculating && first_trial_accepted;
         if !accepted {
             let floor_n = residual_rounding_floor(&ws.assembler.matrix, extent_m, dt);
             if residual < floor_n {
@@ -780,10 +844,11 @@ pub fn solve(
             });
         }
         prepared = true;
-        {
-            // Terms' own unknowns follow the accepted step (friction's dual variables). An
-            // assembly the line search already made at `to` (accepted by its residual) keeps the
-            // duals of before: only its Hessian differs, the gradient is exact.
+        if !tentative {
+            // Terms' own unknowns follow the accepted step (friction's dual variables), unless
+            // they did already (a speculative assembly there). An assembly the line search made
+            // at `to` to judge it by its residual keeps the duals of before: only its Hessian
+            // differs, the gradient is exact.
             let from = problem.state(v, &ws.x, &ws.poses);
             let to = problem.state(&ws.trial_v, &ws.trial_x, &ws.trial_poses);
             for t in terms.iter_mut() {
@@ -799,12 +864,18 @@ pub fn solve(
             // towel under a robot: by 0.69 per iteration).
             if definite.after_step(alpha, residual) {
                 factor_reusable = false;
+                let was_projected = project;
                 if !definite.on && settings.projection == Projection::OnDemand {
                     // An indefinite Hessian far from here says little about here.
                     project = false;
                 }
+                let mut changed = project != was_projected;
                 for t in terms.iter_mut() {
-                    t.use_definite_hessian(definite.on);
+                    changed |= t.use_definite_hessian(definite.on);
+                }
+                if changed {
+                    // An assembly made at the accepted trial holds the Hessians' old form.
+                    assembled = None;
                 }
             }
         }
@@ -923,6 +994,136 @@ mod tests {
             far.after_step(0.2, 3.0) && far.on,
             "a step cut below a quarter switches it on again"
         );
+    }
+
+    /// One node, `f(vₓ) + ½(v_y² + v_z²)`; counts energy evaluations, assemblies, and the
+    /// iterates it accepted (its own state, saved and restored like friction's duals).
+    struct Counting {
+        huber: bool,
+        energies: Mutex<usize>,
+        assemblies: Mutex<usize>,
+        accepted: usize,
+        saved: usize,
+    }
+
+    impl Counting {
+        fn new(huber: bool) -> Self {
+            Self {
+                huber,
+                energies: Mutex::new(0),
+                assemblies: Mutex::new(0),
+                accepted: 0,
+                saved: 0,
+            }
+        }
+        /// `f`, `f′`, `f″`: a quartic well at 1 (Newton's full steps are accepted), or a
+        /// pseudo-Huber well at 10 (Newton's first full step from 0 overshoots by far).
+        fn f(&self, x: f64) -> [f64; 3] {
+            let m = 0.01;
+            if self.huber {
+                let d = x - 10.0;
+                let s = (1.0 + d * d).sqrt();
+                [s + 0.5 * m * x * x, d / s + m * x, 1.0 / (s * s * s) + m]
+            } else {
+                let d = x - 1.0;
+                [0.25 * d.powi(4) + 0.5 * m * x * x, d.powi(3) + m * x, 3.0 * d * d + m]
+            }
+        }
+    }
+
+    impl EnergyTerm for Counting {
+        fn name(&self) -> &str {
+            "counting"
+        }
+        fn num_elements(&self) -> usize {
+            1
+        }
+        fn stencil_width(&self, _state: &EvalState) -> usize {
+            1
+        }
+        fn write_stencils(&self, _state: &EvalState, out: &mut [u32]) {
+            out[0] = 0;
+        }
+        fn energy(&self, state: &EvalState) -> f64 {
+            *self.energies.lock().unwrap() += 1;
+            let v = state.v[0];
+            self.f(v.x)[0] + 0.5 * (v.y * v.y + v.z * v.z)
+        }
+        fn evaluate_element(&self, _e: usize, state: &EvalState, _mode: EvalMode, out: &mut [f64]) {
+            *self.assemblies.lock().unwrap() += 1;
+            let v = state.v[0];
+            let [f, df, ddf] = self.f(v.x);
+            out[0] = f + 0.5 * (v.y * v.y + v.z * v.z);
+            out[1..4].copy_from_slice(&[df, v.y, v.z]);
+            out[4..].iter_mut().for_each(|h| *h = 0.0);
+            out[4] = ddf;
+            out[8] = 1.0;
+            out[12] = 1.0;
+        }
+        fn accept_iterate(&mut self, _from: &EvalState, _to: &EvalState) {
+            self.accepted += 1;
+        }
+        fn save_iterate(&mut self) {
+            self.saved = self.accepted;
+        }
+        fn restore_iterate(&mut self) {
+            self.accepted = self.saved;
+        }
+    }
+
+    fn solve_counting(term: &mut Counting) -> (NewtonReport, f64) {
+        let mut nodes = NodeArrays::default();
+        nodes.push(&[Vector3::zeros()]);
+        let bodies = BodyArrays::default();
+        let problem = StepProblem {
+            nodes: &nodes,
+            bodies: &bodies,
+            dt: 0.01,
+            time: 0.01,
+            gravity: Vector3::zeros(),
+        };
+        let mut ws = NewtonWorkspace::default();
+        let mut v = Vec::new();
+        let settings = NewtonSettings {
+            linear_solver: LinearSolver::Cholesky,
+            ..NewtonSettings::default()
+        };
+        let mut terms: Vec<&mut dyn EnergyTerm> = vec![term];
+        let report = solve(&mut ws, &mut terms, &problem, &mut v, &settings).unwrap();
+        (report, v[0].x)
+    }
+
+    /// While the line searches accept their first trials, each trial is assembled (value,
+    /// gradient, Hessian) and that assembly is the next iteration's: no energy-only
+    /// evaluations, and exactly one assembly per iterate.
+    #[test]
+    fn accepted_trials_are_assembled_once() {
+        let mut term = Counting::new(false);
+        let (report, x) = solve_counting(&mut term);
+        assert!(report.iterations >= 5, "{report:?}");
+        assert_eq!(report.min_step_fraction, 1.0);
+        let [_, df, _] = term.f(x);
+        assert!(df.abs() < 1e-8, "converged: f′ = {df}");
+        assert_eq!(*term.energies.lock().unwrap(), 0);
+        assert_eq!(*term.assemblies.lock().unwrap(), report.iterations + 1);
+        assert_eq!(term.accepted, report.iterations);
+    }
+
+    /// A speculative first trial that the line search cuts: the term's iterate state accepted
+    /// for it tentatively is restored, so it counts each accepted iterate once; the step's
+    /// later line searches evaluate energies only.
+    #[test]
+    fn a_cut_speculative_trial_is_undone() {
+        let mut term = Counting::new(true);
+        let (report, x) = solve_counting(&mut term);
+        assert!(
+            report.line_search_evaluations > report.iterations,
+            "a step was cut: {report:?}"
+        );
+        let [_, df, _] = term.f(x);
+        assert!(df.abs() < 1e-8, "converged: f′ = {df}");
+        assert_eq!(term.accepted, report.iterations);
+        assert!(*term.energies.lock().unwrap() > 0);
     }
 
     #[test]
