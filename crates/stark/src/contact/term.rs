@@ -172,12 +172,14 @@ impl EnergyTerm for Contact {
         }
     }
     fn use_definite_hessian(&mut self, on: bool) -> bool {
-        let changed = self.definite_barriers != on && self.has_definite_form();
+        let changed =
+            self.definite_barriers != on && self.settings.hessian != PairHessian::Exact && !self.pairs.is_empty();
         self.definite_barriers = on;
         changed
     }
     fn has_definite_form(&self) -> bool {
-        self.settings.hessian != PairHessian::Exact && !self.pairs.is_empty()
+        // Friction elements on rigid bodies map their Hessians with the form too.
+        self.settings.hessian != PairHessian::Exact && self.num_elements() > 0
     }
     fn prepare_evaluation(&mut self, state: &EvalState) {
         let pairs = self.detect(state.x);

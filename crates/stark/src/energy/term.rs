@@ -92,7 +92,7 @@ pub trait EnergyTerm: Send + Sync {
     }
 
     /// Whether [`use_definite_hessian`](Self::use_definite_hessian) can change what this term
-    /// assembles (it has such a form and pairs to use it on).
+    /// assembles (it has such a form and elements to use it on).
     fn has_definite_form(&self) -> bool {
         false
     }

@@ -710,16 +710,25 @@ pub fn solve(
         let mut accepted = false;
         let mut first_trial_accepted = false;
         let mut evaluation_in_line_search_s = 0.0;
+        // The forces' rounding floor at the current iterate, taken before an assembly in the
+        // line search overwrites its matrix.
+        let mut floor_n: Option<f64> = None;
         // The terms accepted the current trial tentatively (its assembly was speculative).
         let mut tentative = false;
         // A step this short ends the solve once accepted: nothing would use its assembly.
         let last_step = settings.step_tolerance_m_s > 0.0 && norm_inf(&ws.step) < settings.step_tolerance_m_s;
         let keep_speculating = speculate;
-        // Nor one after which the barriers' Hessians change form (the assembly would be stale).
-        let form_changes = settings.definite_far_from_solution
-            && definite.next(alpha, residual) != definite.on
-            && terms.iter().any(|t| t.has_definite_form());
-        speculate &= !(last_step || form_changes);
+        // Nor one after which the Hessians change form (the assembly would be stale): the
+        // barriers' definite form, or the projection released with it.
+        let form_changes = settings.definite_far_from_solution && {
+            let next = definite.next(alpha, residual);
+            next != definite.on
+                && (terms.iter().any(|t| t.has_definite_form())
+                    || (!next && project && settings.projection == Projection::OnDemand))
+        };
+        // Nor the last iteration allowed (nothing would use it).
+        let last_allowed = iteration + 1 == settings.max_iterations;
+        speculate &= !(last_step || form_changes || last_allowed);
         // The assembly of the trial just evaluated, when it was assembled.
         let mut speculative: Option<Assembled>;
         let mut trial_residual = f64::NAN;
@@ -742,6 +751,8 @@ pub fn solve(
             }
             let trial = problem.state(&ws.trial_v, &ws.trial_x, &ws.trial_poses);
             let e = if std::mem::take(&mut speculate) {
+                // The forces' rounding floor belongs to the current iterate's matrix.
+                floor_n.get_or_insert_with(|| residual_rounding_floor(&ws.assembler.matrix, extent_m, dt));
                 let t4 = Instant::now();
                 let from = problem.state(v, &ws.x, &ws.poses);
                 for t in terms.iter_mut() {
@@ -793,6 +804,7 @@ pub fn solve(
                 let done = match speculative.take() {
                     Some(done) => done,
                     None => {
+                        floor_n.get_or_insert_with(|| residual_rounding_floor(&ws.assembler.matrix, extent_m, dt));
                         let t4 = Instant::now();
                         let shared: Vec<&dyn EnergyTerm> = terms.iter().map(|t| &**t as &dyn EnergyTerm).collect();
                         let done = ws.assembler.assemble(&shared, &trial, &dofs, mode, &mut ws.gradient);
@@ -806,6 +818,7 @@ pub fn solve(
                 if done.energy.is_finite() && trial_residual < residual {
                     assembled = Some(done);
                     accepted = true;
+                    first_trial_accepted = trial_index == 0;
                     break;
                 }
             }
@@ -821,7 +834,7 @@ pub fn solve(
         // energies (a cut speculative trial costs an assembly for nothing).
         speculate = keep_speculating && first_trial_accepted;
         if !accepted {
-            let floor_n = residual_rounding_floor(&ws.assembler.matrix, extent_m, dt);
+            let floor_n = floor_n.unwrap_or_else(|| residual_rounding_floor(&ws.assembler.matrix, extent_m, dt));
             if residual < floor_n {
                 report.converged_by = ConvergedBy::Rounding;
                 return Ok(report);
@@ -869,7 +882,7 @@ pub fn solve(
                     // An indefinite Hessian far from here says little about here.
                     project = false;
                 }
-                let mut changed = project != was_projected;
+                let mut changed = project != was_projected || terms.iter().any(|t| t.has_definite_form());
                 for t in terms.iter_mut() {
                     changed |= t.use_definite_hessian(definite.on);
                 }
