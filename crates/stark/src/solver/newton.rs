@@ -204,6 +204,32 @@ fn residual_rounding_floor(matrix: &crate::solver::linear::BlockSparseMatrix, ex
     1e-14 * extent_m * row_max / (dt * dt)
 }
 
+/// A line search's assembly at its trial `state` (the next iteration's if the trial is accepted):
+/// first the forces' rounding floor of the current iterate's matrix, which it overwrites. Its
+/// time counts as evaluation (`in_line_search_s` keeps it out of the line search's).
+#[allow(clippy::too_many_arguments)]
+fn assemble_trial(
+    assembler: &mut Assembler,
+    gradient: &mut [f64],
+    terms: &[&mut dyn EnergyTerm],
+    state: &EvalState,
+    dofs: &DofMap,
+    mode: EvalMode,
+    floor: &mut Option<f64>,
+    extent_m: f64,
+    times: &mut PhaseTimes,
+    in_line_search_s: &mut f64,
+) -> Assembled {
+    floor.get_or_insert_with(|| residual_rounding_floor(&assembler.matrix, extent_m, state.dt));
+    let t = Instant::now();
+    let shared: Vec<&dyn EnergyTerm> = terms.iter().map(|t| &**t as &dyn EnergyTerm).collect();
+    let done = assembler.assemble(&shared, state, dofs, mode, gradient);
+    let seconds = t.elapsed().as_secs_f64();
+    times.evaluation_s += seconds;
+    *in_line_search_s += seconds;
+    done
+}
+
 fn total_energy(terms: &[&mut dyn EnergyTerm], state: &EvalState) -> f64 {
     terms.iter().map(|t| t.energy(state)).sum()
 }
@@ -471,7 +497,7 @@ pub fn solve(
     // trial's assembly is the next iteration's, which saves the energy evaluation. The trial
     // is accepted tentatively before (friction's duals follow the accepted iterates and enter
     // the Hessian), and restored when the line search goes on.
-    let mut speculate = true;
+    let mut speculating = true;
     // Diagnostics: the DOF block of the residual's largest entry.
     let mut residual_at = String::new();
     for iteration in 0..settings.max_iterations {
@@ -717,7 +743,6 @@ pub fn solve(
         let mut tentative = false;
         // A step this short ends the solve once accepted: nothing would use its assembly.
         let last_step = settings.step_tolerance_m_s > 0.0 && norm_inf(&ws.step) < settings.step_tolerance_m_s;
-        let keep_speculating = speculate;
         // Nor one after which the Hessians change form (the assembly would be stale): the
         // barriers' definite form, or the projection released with it.
         let form_changes = settings.definite_far_from_solution && {
@@ -728,7 +753,7 @@ pub fn solve(
         };
         // Nor the last iteration allowed (nothing would use it).
         let last_allowed = iteration + 1 == settings.max_iterations;
-        speculate &= !(last_step || form_changes || last_allowed);
+        let mut speculate = speculating && !(last_step || form_changes || last_allowed);
         // The assembly of the trial just evaluated, when it was assembled.
         let mut speculative: Option<Assembled>;
         let mut trial_residual = f64::NAN;
@@ -751,21 +776,24 @@ pub fn solve(
             }
             let trial = problem.state(&ws.trial_v, &ws.trial_x, &ws.trial_poses);
             let e = if std::mem::take(&mut speculate) {
-                // The forces' rounding floor belongs to the current iterate's matrix.
-                floor_n.get_or_insert_with(|| residual_rounding_floor(&ws.assembler.matrix, extent_m, dt));
-                let t4 = Instant::now();
                 let from = problem.state(v, &ws.x, &ws.poses);
                 for t in terms.iter_mut() {
                     t.save_iterate();
                     t.accept_iterate(&from, &trial);
                 }
                 tentative = true;
-                let shared: Vec<&dyn EnergyTerm> = terms.iter().map(|t| &**t as &dyn EnergyTerm).collect();
-                let done = ws.assembler.assemble(&shared, &trial, &dofs, mode, &mut ws.gradient);
-                let assembly_s = t4.elapsed().as_secs_f64();
-                report.times.evaluation_s += assembly_s;
-                // Counted as evaluation, not line search (it is the next iteration's).
-                evaluation_in_line_search_s += assembly_s;
+                let done = assemble_trial(
+                    &mut ws.assembler,
+                    &mut ws.gradient,
+                    terms,
+                    &trial,
+                    &dofs,
+                    mode,
+                    &mut floor_n,
+                    extent_m,
+                    &mut report.times,
+                    &mut evaluation_in_line_search_s,
+                );
                 let e = done.energy;
                 speculative = Some(done);
                 e
@@ -803,16 +831,18 @@ pub fn solve(
                 // gradient and matrix may be overwritten).
                 let done = match speculative.take() {
                     Some(done) => done,
-                    None => {
-                        floor_n.get_or_insert_with(|| residual_rounding_floor(&ws.assembler.matrix, extent_m, dt));
-                        let t4 = Instant::now();
-                        let shared: Vec<&dyn EnergyTerm> = terms.iter().map(|t| &**t as &dyn EnergyTerm).collect();
-                        let done = ws.assembler.assemble(&shared, &trial, &dofs, mode, &mut ws.gradient);
-                        let assembly_s = t4.elapsed().as_secs_f64();
-                        report.times.evaluation_s += assembly_s;
-                        evaluation_in_line_search_s += assembly_s;
-                        done
-                    }
+                    None => assemble_trial(
+                        &mut ws.assembler,
+                        &mut ws.gradient,
+                        terms,
+                        &trial,
+                        &dofs,
+                        mode,
+                        &mut floor_n,
+                        extent_m,
+                        &mut report.times,
+                        &mut evaluation_in_line_search_s,
+                    ),
                 };
                 trial_residual = norm_inf(&ws.gradient) / dt;
                 if done.energy.is_finite() && trial_residual < residual {
@@ -832,7 +862,7 @@ pub fn solve(
         report.times.line_search_s += t3.elapsed().as_secs_f64() - evaluation_in_line_search_s;
         // Once a first trial was cut in this step, the step's line searches only evaluate
         // energies (a cut speculative trial costs an assembly for nothing).
-        speculate = keep_speculating && first_trial_accepted;
+        speculating &= first_trial_accepted;
         if !accepted {
             let floor_n = floor_n.unwrap_or_else(|| residual_rounding_floor(&ws.assembler.matrix, extent_m, dt));
             if residual < floor_n {
