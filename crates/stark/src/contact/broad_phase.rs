@@ -1,9 +1,14 @@
 //! Broad phase: candidate pairs from grown swept boxes, and the cache that lets several line
 //! searches share them.
 
+use super::ccd::box_gap;
 use super::Contact;
 use crate::geometry::aabb::{edge_swept_aabb, point_swept_aabb, triangle_swept_aabb, Aabb};
 use crate::geometry::bvh::Bvh;
+use crate::geometry::distance::{
+    edge_edge_distance_sq_typed, edge_edge_distance_type, point_triangle_distance_sq_typed,
+    point_triangle_distance_type,
+};
 use nalgebra::Vector3;
 use rayon::prelude::*;
 
@@ -28,6 +33,15 @@ impl Contact {
             return c;
         }
         let x = |i: u32| (&from[i as usize], &to[i as usize]);
+        // How far each node can be from its position in `from` in a state the candidates cover
+        // (within the margin, per axis, of the box it sweeps), for the pruning when they serve
+        // again.
+        c.origin = from.to_vec();
+        c.reach_m = from
+            .par_iter()
+            .zip(to)
+            .map(|(a, b)| (b - a).norm() + 3f64.sqrt() * margin_m)
+            .collect();
         if !self.triangles.is_empty() && !self.points.is_empty() {
             let point_boxes: Vec<Aabb> = c
                 .swept
@@ -76,6 +90,67 @@ impl Contact {
         c
     }
 
+    /// Drop the candidates that can neither become active nor bound a step in any state the
+    /// candidates cover: a pair's distance shrinks from its value at the candidates' origin by
+    /// at most the largest reach of its one side plus that of the other (the points of an edge
+    /// or a triangle are convex combinations of its corners). The boxes the broad phase compares
+    /// are much larger than the primitives for long edges and large triangles (a rigid box's
+    /// faces against a fine mesh): there most candidates go. The pairs that remain, and their
+    /// order, are those any covering candidates give, so the results do not change. Returns the
+    /// fraction removed.
+    fn prune(&self, c: &mut Candidates) -> f64 {
+        let (x, reach) = (&c.origin, &c.reach_m);
+        let r = |i: u32| reach[i as usize];
+        let quiet = super::ccd::ccd_silent_above_m();
+        let before = (c.point_triangle.len(), c.edge_edge.len());
+        c.point_triangle = c
+            .point_triangle
+            .par_iter()
+            .copied()
+            .filter(|&(pi, ti)| {
+                let (p, t) = (self.points[pi as usize], self.triangles[ti as usize]);
+                let gap = self
+                    .dhat(self.point_obj[pi as usize], self.tri_obj[ti as usize])
+                    .max(quiet);
+                let bound = gap + r(p) + r(t[0]).max(r(t[1])).max(r(t[2]));
+                let (a, b0, b1, b2) = (&x[p as usize], &x[t[0] as usize], &x[t[1] as usize], &x[t[2] as usize]);
+                // The boxes' gap first: a tenth of the distance's cost.
+                if box_gap(&[*a], &[*b0, *b1, *b2]) > bound {
+                    return false;
+                }
+                let ty = point_triangle_distance_type(a, b0, b1, b2);
+                point_triangle_distance_sq_typed(a, b0, b1, b2, ty) <= bound * bound * (1.0 + 1e-9)
+            })
+            .collect();
+        c.edge_edge = c
+            .edge_edge
+            .par_iter()
+            .copied()
+            .filter(|&(i, j)| {
+                let (ea, eb) = (self.edges[i as usize], self.edges[j as usize]);
+                let gap = self
+                    .dhat(self.edge_obj[i as usize], self.edge_obj[j as usize])
+                    .max(quiet);
+                let bound = gap + r(ea[0]).max(r(ea[1])) + r(eb[0]).max(r(eb[1]));
+                let (a0, a1, b0, b1) = (
+                    &x[ea[0] as usize],
+                    &x[ea[1] as usize],
+                    &x[eb[0] as usize],
+                    &x[eb[1] as usize],
+                );
+                if box_gap(&[*a0, *a1], &[*b0, *b1]) > bound {
+                    return false;
+                }
+                let ty = edge_edge_distance_type(a0, a1, b0, b1);
+                edge_edge_distance_sq_typed(a0, a1, b0, b1, ty) <= bound * bound * (1.0 + 1e-9)
+            })
+            .collect();
+        c.origin = Vec::new();
+        c.reach_m = Vec::new();
+        let (kept, found) = (c.point_triangle.len() + c.edge_edge.len(), before.0 + before.1);
+        1.0 - kept as f64 / found.max(1) as f64
+    }
+
     /// A fingerprint of what the candidates depend on besides positions: the primitives, the
     /// objects' thicknesses and which pairs of objects collide.
     pub(super) fn candidate_config(&self) -> u64 {
@@ -98,8 +173,20 @@ impl Contact {
         from: &[Vector3<f64>],
         to: &[Vector3<f64>],
     ) -> Candidates {
-        if let Some(c) = cache {
+        if let Some(mut c) = cache {
             if c.cover(&self.points, from) && c.cover(&self.points, to) {
+                c.reuses += 1;
+                if c.reuses == PRUNE_AT_REUSE && !c.reach_m.is_empty() {
+                    // After a pruning that removed little (a cloth wrapped round a box: a tenth),
+                    // the next ones are skipped, then tried again.
+                    use std::sync::atomic::Ordering::Relaxed;
+                    let skips = self.prune_skips.load(Relaxed);
+                    if skips > 0 {
+                        self.prune_skips.store(skips - 1, Relaxed);
+                    } else if self.prune(&mut c) < PRUNE_MIN_YIELD {
+                        self.prune_skips.store(PRUNE_SKIPS_AFTER_LOW_YIELD, Relaxed);
+                    }
+                }
                 return c;
             }
         }
@@ -107,6 +194,15 @@ impl Contact {
         self.candidates(from, to, thickest)
     }
 }
+
+/// Candidates are pruned when they serve for this many times after their broad phase: a pruning
+/// costs about one narrow phase over them, and candidates that serve a single line search (a
+/// cloth on a spinning box: a new broad phase at nearly every Newton iteration) never repay it.
+const PRUNE_AT_REUSE: u32 = 2;
+/// A pruning that removed less than this fraction of the candidates does not pay for itself.
+const PRUNE_MIN_YIELD: f64 = 0.25;
+/// Pruning opportunities skipped after one that did not pay.
+const PRUNE_SKIPS_AFTER_LOW_YIELD: u32 = 15;
 
 /// Candidate pairs (indices into the contact points, edges and triangles), valid while every
 /// contact point stays within `margin_m` of the box it `swept` when they were found. Both lists
@@ -119,6 +215,12 @@ pub(super) struct Candidates {
     pub(super) edge_edge: Vec<(u32, u32)>,
     swept: Vec<Aabb>,
     margin_m: f64,
+    /// All nodes' positions where the candidates were found, m, and how far each can be from
+    /// there in a covered state, m (until the candidates are pruned; empty after).
+    origin: Vec<Vector3<f64>>,
+    reach_m: Vec<f64>,
+    /// Times the candidates served again after the broad phase that found them.
+    reuses: u32,
 }
 
 impl Candidates {

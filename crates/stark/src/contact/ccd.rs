@@ -12,7 +12,8 @@ use rayon::prelude::*;
 
 /// The distance between the bounding boxes of two point sets: a lower bound of the distance
 /// between their convex hulls (a primitive's points span it).
-fn box_gap(a: &[Vector3<f64>], b: &[Vector3<f64>]) -> f64 {
+#[inline]
+pub(super) fn box_gap(a: &[Vector3<f64>], b: &[Vector3<f64>]) -> f64 {
     let mut gap_sq = 0.0;
     for k in 0..3 {
         let (a_min, a_max) = a.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
@@ -27,16 +28,28 @@ fn box_gap(a: &[Vector3<f64>], b: &[Vector3<f64>]) -> f64 {
     gap_sq.sqrt()
 }
 
+/// The CCD queries' parameters: a bounded search (a query that cannot be decided within the
+/// budget returns the start of its earliest undecided box, still a safe if short step).
+fn ccd_params() -> CcdParams {
+    CcdParams {
+        max_iterations: 10_000,
+        ..CcdParams::default()
+    }
+}
+
+/// A pair whose distance stays above this along a step never bounds it: CCD stops a pair where
+/// its distance reaches at most `max_gap` (its target gap; here `min_distance` is 0), give or
+/// take its tolerance, m.
+pub(super) fn ccd_silent_above_m() -> f64 {
+    let p = ccd_params();
+    p.max_gap + p.tolerance
+}
+
 impl Contact {
     /// Largest fraction of the motion `from → to` free of collisions (additive CCD with a
     /// minimum separation) over the candidates, and the number of exact CCD queries.
     pub(super) fn ccd_fraction(&self, c: &Candidates, from: &[Vector3<f64>], to: &[Vector3<f64>]) -> (f64, usize) {
-        // A bounded search: a query that cannot be decided within the budget returns the start of
-        // its earliest undecided box, still a safe (if short) step.
-        let params = CcdParams {
-            max_iterations: 10_000,
-            ..CcdParams::default()
-        };
+        let params = ccd_params();
         // A cheap conservative filter first: the distance of a pair can shrink by at most the sum
         // of the largest displacements of its two sides, so a pair farther apart than that
         // cannot collide within the step.

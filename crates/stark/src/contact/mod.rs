@@ -198,6 +198,8 @@ pub struct Contact {
     ccd_record: (f64, usize),
     /// Candidates of the last line-search segment or detection (reused while they cover it).
     candidate_cache: Option<Candidates>,
+    /// Pruning opportunities of candidates left to skip (`broad_phase`).
+    prune_skips: std::sync::atomic::AtomicU32,
     /// `candidate_config()` when the cached candidates were found.
     candidate_config: u64,
     /// Primitives of rigid bodies' meshes and of the other objects (set in `before_step`), for
@@ -236,6 +238,7 @@ impl Default for Contact {
             object_masses_kg: vec![],
             ccd_record: (1.0, 0),
             candidate_cache: None,
+            prune_skips: Default::default(),
             candidate_config: 0,
             rigid_split: RigidSplit::default(),
             validity_record: (0, 0, 0.0),

@@ -192,6 +192,86 @@ fn wavy_grid(n: usize, size: f64, z: f64, phase: f64) -> (Vec<Vector3<f64>>, Vec
     (x, t)
 }
 
+/// Candidates that serve again are pruned of the pairs that can neither become active nor bound
+/// a step while they cover the state (a long edge's box spans a whole mesh), and the pairs and
+/// CCD bounds they give stay those of the full list and of a fresh broad phase.
+#[test]
+fn pruned_candidates_give_the_same_pairs_and_ccd_bounds() {
+    let mut settings = Settings::default();
+    settings.contact.default_thickness_m = Some(1e-3);
+    let mut sim = Simulation::new(settings).unwrap();
+    // A fine grid under two large triangles 1.5 mm above it (d̂ = 2 mm).
+    let (xa, ta) = wavy_grid(12, 0.3, 0.0, 0.0);
+    let (xb, tb) = wavy_grid(1, 0.3, 1.5e-3, 0.0);
+    sim.add_prescribed_surface("fine", &xa, &ta, 1e-3, 1e4).unwrap();
+    sim.add_prescribed_surface("coarse", &xb, &tb, 1e-3, 1e4).unwrap();
+    let x = sim.nodes.x.clone();
+    // A sweep into `x` from a state with the large triangles 0.6 mm higher.
+    let from: Vec<Vector3<f64>> = x
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            if i >= xa.len() {
+                p + Vector3::new(0.0, 0.0, 6e-4)
+            } else {
+                *p
+            }
+        })
+        .collect();
+    let mid: Vec<Vector3<f64>> = from.iter().zip(&x).map(|(a, b)| 0.5 * (a + b)).collect();
+    let key = |pairs: &[super::ContactPair]| pairs.iter().map(|p| (p.kind, p.nodes)).collect::<Vec<_>>();
+    at_rest(&mut sim, |contact, _| {
+        let fresh: Vec<_> = [&x, &mid, &from]
+            .iter()
+            .map(|state| {
+                contact.candidate_cache = None;
+                key(&contact.detect(state))
+            })
+            .collect();
+        assert!(fresh[0].len() > 100, "{} pairs", fresh[0].len());
+        let full = contact.candidates_for(None, &from, &x);
+        let (full_pt, full_ee) = (full.point_triangle.len(), full.edge_edge.len());
+        // The list serves three times (its second reuse prunes it).
+        contact.candidate_cache = Some(full);
+        for (state, fresh) in [&x, &mid, &from].iter().zip(&fresh) {
+            assert_eq!(&key(&contact.detect(state)), fresh);
+        }
+        let pruned = contact.candidate_cache.take().unwrap();
+        let (pt, ee) = (pruned.point_triangle.len(), pruned.edge_edge.len());
+        assert!(
+            pt + ee < (full_pt + full_ee) / 2,
+            "point–triangle {full_pt} → {pt}, edge–edge {full_ee} → {ee}"
+        );
+        contact.candidate_cache = Some(pruned);
+        for (state, fresh) in [&x, &mid, &from].iter().zip(&fresh) {
+            assert_eq!(&key(&contact.detect(state)), fresh);
+        }
+        // A step that drives the large triangles 2 mm down through the grid: CCD bounds it, by
+        // the same fraction from the pruned list.
+        let through: Vec<Vector3<f64>> = x
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                if i >= xa.len() {
+                    p - Vector3::new(0.0, 0.0, 2e-3)
+                } else {
+                    *p
+                }
+            })
+            .collect();
+        let full = contact.candidates_for(None, &x, &through);
+        let (alpha, queries) = contact.ccd_fraction(&full, &x, &through);
+        assert!(alpha < 0.75, "{alpha}");
+        let mut pruned = full;
+        for _ in 0..2 {
+            pruned = contact.candidates_for(Some(pruned), &x, &through);
+        }
+        let (pruned_alpha, pruned_queries) = contact.ccd_fraction(&pruned, &x, &through);
+        assert_eq!(pruned_alpha, alpha);
+        assert!(pruned_queries <= queries);
+    });
+}
+
 /// The pairs found at a state come in one order whichever broad phase found the candidates (a
 /// new one, or one cached from a sweep that covers the state): a resumed run, whose first broad
 /// phase is new, sums its pairs in the order of the run that kept its cache. And candidates
