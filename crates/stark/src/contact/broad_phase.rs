@@ -100,7 +100,6 @@ impl Contact {
     /// fraction removed.
     fn prune(&self, c: &mut Candidates) -> f64 {
         let (x, reach) = (&c.origin, &c.reach_m);
-        let r = |i: u32| reach[i as usize];
         let quiet = super::ccd::ccd_silent_above_m();
         let before = (c.point_triangle.len(), c.edge_edge.len());
         c.point_triangle = c
@@ -109,17 +108,11 @@ impl Contact {
             .copied()
             .filter(|&(pi, ti)| {
                 let (p, t) = (self.points[pi as usize], self.triangles[ti as usize]);
-                let gap = self
-                    .dhat(self.point_obj[pi as usize], self.tri_obj[ti as usize])
-                    .max(quiet);
-                let bound = gap + r(p) + r(t[0]).max(r(t[1])).max(r(t[2]));
-                let (a, b0, b1, b2) = (&x[p as usize], &x[t[0] as usize], &x[t[1] as usize], &x[t[2] as usize]);
-                // The boxes' gap first: a tenth of the distance's cost.
-                if box_gap(&[*a], &[*b0, *b1, *b2]) > bound {
-                    return false;
-                }
-                let ty = point_triangle_distance_type(a, b0, b1, b2);
-                point_triangle_distance_sq_typed(a, b0, b1, b2, ty) <= bound * bound * (1.0 + 1e-9)
+                let gap = self.dhat(self.point_obj[pi as usize], self.tri_obj[ti as usize]);
+                within_reach(x, reach, &[p], &t, gap.max(quiet), || {
+                    let [a, b0, b1, b2] = [p, t[0], t[1], t[2]].map(|i| &x[i as usize]);
+                    point_triangle_distance_sq_typed(a, b0, b1, b2, point_triangle_distance_type(a, b0, b1, b2))
+                })
             })
             .collect();
         c.edge_edge = c
@@ -128,21 +121,11 @@ impl Contact {
             .copied()
             .filter(|&(i, j)| {
                 let (ea, eb) = (self.edges[i as usize], self.edges[j as usize]);
-                let gap = self
-                    .dhat(self.edge_obj[i as usize], self.edge_obj[j as usize])
-                    .max(quiet);
-                let bound = gap + r(ea[0]).max(r(ea[1])) + r(eb[0]).max(r(eb[1]));
-                let (a0, a1, b0, b1) = (
-                    &x[ea[0] as usize],
-                    &x[ea[1] as usize],
-                    &x[eb[0] as usize],
-                    &x[eb[1] as usize],
-                );
-                if box_gap(&[*a0, *a1], &[*b0, *b1]) > bound {
-                    return false;
-                }
-                let ty = edge_edge_distance_type(a0, a1, b0, b1);
-                edge_edge_distance_sq_typed(a0, a1, b0, b1, ty) <= bound * bound * (1.0 + 1e-9)
+                let gap = self.dhat(self.edge_obj[i as usize], self.edge_obj[j as usize]);
+                within_reach(x, reach, &ea, &eb, gap.max(quiet), || {
+                    let [a0, a1, b0, b1] = [ea[0], ea[1], eb[0], eb[1]].map(|i| &x[i as usize]);
+                    edge_edge_distance_sq_typed(a0, a1, b0, b1, edge_edge_distance_type(a0, a1, b0, b1))
+                })
             })
             .collect();
         c.origin = Vec::new();
@@ -193,6 +176,31 @@ impl Contact {
         let thickest = self.objects.iter().map(|o| o.thickness_m).fold(0.0, f64::max);
         self.candidates(from, to, thickest)
     }
+}
+
+/// Whether two primitives (their corner nodes `a` and `b`) can come within `gap` of each other
+/// while each node stays within its `reach` of `x`: a primitive's points move no farther than its
+/// farthest corner. `distance_sq` is their squared distance at `x`, computed only when the boxes'
+/// gap (a tenth of its cost) does not already decide.
+fn within_reach(
+    x: &[Vector3<f64>],
+    reach: &[f64],
+    a: &[u32],
+    b: &[u32],
+    gap: f64,
+    distance_sq: impl FnOnce() -> f64,
+) -> bool {
+    let farthest = |s: &[u32]| s.iter().map(|&i| reach[i as usize]).fold(0.0, f64::max);
+    let bound = gap + farthest(a) + farthest(b);
+    let corners = |s: &[u32]| {
+        let mut c = [Vector3::zeros(); 3];
+        for (k, &i) in s.iter().enumerate() {
+            c[k] = x[i as usize];
+        }
+        (c, s.len())
+    };
+    let ((ca, na), (cb, nb)) = (corners(a), corners(b));
+    box_gap(&ca[..na], &cb[..nb]) <= bound && distance_sq() <= bound * bound * (1.0 + 1e-9)
 }
 
 /// Candidates are pruned when they serve for this many times after their broad phase: a pruning
