@@ -39,10 +39,10 @@ fn ccd_params() -> CcdParams {
 
 /// A pair whose distance stays above this along a step never bounds it: CCD stops a pair where
 /// its distance reaches at most `max_gap` (its target gap; here `min_distance` is 0), give or
-/// take its tolerance, m.
+/// take its tolerance (twice that, for room), m.
 pub(super) fn ccd_silent_above_m() -> f64 {
     let p = ccd_params();
-    p.max_gap + p.tolerance
+    2.0 * (p.max_gap + p.tolerance)
 }
 
 impl Contact {
