@@ -100,12 +100,8 @@ impl BlockSparseMatrix {
     fn row_times(&self, r: usize, x: &[f64]) -> [f64; 3] {
         #[cfg(all(target_arch = "x86_64", target_feature = "avx2", target_feature = "fma"))]
         {
-            assert!(self.cols[self.row_start[r]..self.row_start[r + 1]]
-                .last()
-                .is_none_or(|&c| 3 * c as usize + 3 <= x.len()));
-            // SAFETY: the target has AVX2 and FMA (compile-time features), and every load
-            // reads inside its block or its 3-vector of `x` (columns are sorted, the last is
-            // checked above; masked loads for a block's last row and for `x`).
+            // SAFETY: the target has AVX2 and FMA (compile-time features); `row_times_avx2`
+            // checks each column against `x` before it reads there.
             unsafe { self.row_times_avx2(r, x) }
         }
         #[cfg(not(all(target_arch = "x86_64", target_feature = "avx2", target_feature = "fma")))]
@@ -125,6 +121,9 @@ impl BlockSparseMatrix {
         let range = self.row_start[r]..self.row_start[r + 1];
         for (c, b) in self.cols[range.clone()].iter().zip(&self.values[range]) {
             let c = *c as usize;
+            // Every load reads inside its block or its 3-vector of `x` (masked loads for the
+            // block's last row and for `x`).
+            assert!(3 * c + 3 <= x.len(), "block column {c} beyond the vector");
             let xc = _mm256_maskload_pd(x.as_ptr().add(3 * c), first3);
             let bp = b.as_ptr();
             p0 = _mm256_fmadd_pd(_mm256_loadu_pd(bp), xc, p0);
