@@ -195,9 +195,8 @@ pub fn rb_point(mut settings: Settings) -> Result<Simulation> {
 /// 0.1 mm) 1 cm above it, offset by (13, 7) mm; μ = 1 for all pairs, ε_v = 0.01 m/s; dt = 1/30 s.
 pub fn deformable_and_rigid_collisions(mut settings: Settings) -> Result<Simulation> {
     settings.name = "deformable_and_rigid_collisions".into();
-    // A small system stiffened by rigid bodies (joints, contact on lever arms): one sparse
-    // factorisation per Newton iteration beats block-Jacobi CG (~80 iterations per solve here).
-    settings.newton.linear_solver = crate::solver::LinearSolver::Cholesky;
+    // Block-Jacobi PCG, as the original: ~26 CG iterations per Newton iteration here, a quarter
+    // less wall time than a sparse factorisation per iteration (BENCHMARKS.md, 2026-12-06).
     settings.time_step_s = 1.0 / 30.0;
     stark_tolerances(&mut settings);
     settings.contact.friction_stick_slide_threshold_m_s = 0.01;
@@ -246,9 +245,8 @@ pub fn simple_grasp(settings: Settings) -> Result<Simulation> {
 /// [`simple_grasp`] with the friction `mu_hold` before and `mu_slide` from `slide_from_s`.
 pub fn simple_grasp_with(mut settings: Settings, mu_hold: f64, mu_slide: f64, slide_from_s: f64) -> Result<Simulation> {
     settings.name = "simple_grasp".into();
-    // A small system stiffened by rigid bodies (joints, contact on lever arms): one sparse
-    // factorisation per Newton iteration beats block-Jacobi CG (~80 iterations per solve here).
-    settings.newton.linear_solver = crate::solver::LinearSolver::Cholesky;
+    // Block-Jacobi PCG, as the original: ~19 CG iterations per Newton iteration here, a quarter
+    // less wall time than a sparse factorisation per iteration (BENCHMARKS.md, 2026-12-06).
     settings.time_step_s = 1.0 / 30.0;
     settings.gravity_m_s2 = [0.0; 3];
     stark_tolerances(&mut settings);
