@@ -163,19 +163,26 @@ impl BlockSparseMatrix {
             .enumerate()
             .map(|(chunk, ys)| {
                 let first = chunk * ROWS_PER_TASK;
-                let mut xy = [0.0; 3];
-                for (k, yr) in ys.chunks_exact_mut(3).enumerate() {
-                    let r = first + k;
-                    let acc = self.row_times(r, x);
-                    yr.copy_from_slice(&acc);
-                    for i in 0..3 {
-                        xy[i] += x[3 * r + i] * acc[i];
-                    }
-                }
-                xy[0] + xy[1] + xy[2]
+                self.mul_rows_dot(first..first + ys.len() / 3, x, ys)
             })
             .collect();
         partial.iter().sum()
+    }
+
+    /// Block rows `rows` of `A x` into `y` (their `3 · rows.len()` entries), returning `x · y`
+    /// over those rows (summed per component, then the three added).
+    #[inline]
+    pub fn mul_rows_dot(&self, rows: std::ops::Range<usize>, x: &[f64], y: &mut [f64]) -> f64 {
+        debug_assert_eq!(y.len(), 3 * rows.len());
+        let mut xy = [0.0; 3];
+        for (r, yr) in rows.zip(y.chunks_exact_mut(3)) {
+            let acc = self.row_times(r, x);
+            yr.copy_from_slice(&acc);
+            for i in 0..3 {
+                xy[i] += x[3 * r + i] * acc[i];
+            }
+        }
+        xy[0] + xy[1] + xy[2]
     }
 
     /// Dense copy (tests and debugging only).
@@ -213,7 +220,7 @@ pub fn dot(a: &[f64], b: &[f64]) -> f64 {
 /// `a · b` summed in eight interleaved lanes: the compiler keeps them in vector registers, where
 /// one running sum would make every addition wait for the one before (a fixed order all the same,
 /// so results do not depend on the thread count).
-fn dot_lanes(a: &[f64], b: &[f64]) -> f64 {
+pub fn dot_lanes(a: &[f64], b: &[f64]) -> f64 {
     const LANES: usize = 8;
     let mut acc = [0.0f64; LANES];
     let (a8, b8) = (a.chunks_exact(LANES), b.chunks_exact(LANES));
