@@ -618,15 +618,23 @@ pub fn solve(
                     let t_factor = Instant::now();
                     solved = ws
                         .cholesky
-                        .solve(matrix, ws.assembler.pattern_id, &ws.rhs, &mut ws.step)
+                        .solve(
+                            matrix,
+                            ws.assembler.pattern_id,
+                            &ws.rhs,
+                            &mut ws.step,
+                            definite.on || project,
+                        )
                         .is_ok();
                     if trace {
                         eprintln!(
-                            "  factorised: {} factor entries in {:.3} s",
+                            "  factorised: {} factor entries in {:.3} s ({} refinement iterations)",
                             ws.cholesky.factor_len(),
-                            t_factor.elapsed().as_secs_f64()
+                            t_factor.elapsed().as_secs_f64(),
+                            ws.cholesky.refine_iterations
                         );
                     }
+                    report.cg_iterations += ws.cholesky.refine_iterations;
                     indefinite = !solved;
                     factor_reusable = solved;
                 }
