@@ -63,8 +63,8 @@ fn apply_preconditioner(inv_diag: &[[f64; 9]], r: &[f64], z: &mut [f64]) {
 /// shared by the pool's threads. The threads stay in the solve from its start to its end,
 /// taking chunks as they come: a CG iteration of a 10k-unknown cloth lasts ~0.1 ms, too short for
 /// a parallel loop per vector operation, whose idle threads go to sleep between them and wake
-/// too late to take a share (two threads on hanging_cloth_64: the second ran a tenth of the
-/// solve's chunks, BENCHMARKS.md). Partial sums are kept per chunk and added in chunk order:
+/// too late to take a share (two threads on hanging_cloth_64: the second did a tenth of the
+/// solve's work, BENCHMARKS.md). Partial sums are kept per chunk and added in chunk order:
 /// the result does not depend on the thread count.
 pub fn solve(a: &BlockSparseMatrix, b: &[f64], x: &mut [f64], tolerance: f64, max_iterations: usize) -> CgInfo {
     let inv_diag = block_jacobi(a);
