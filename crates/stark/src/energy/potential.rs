@@ -208,6 +208,12 @@ pub trait Potential<const N: usize>: Send + Sync {
     fn is_convex(&self) -> bool {
         false
     }
+    /// Element `e`'s Hessian in world positions is positive semi-definite everywhere. On rigid
+    /// bodies its Hessian in their velocities is then projected only in each body's 3×3
+    /// second-order rotation term ([`MapProjection::SecondOrderOnly`]) instead of whole.
+    fn is_element_convex(&self, _e: usize) -> bool {
+        self.is_convex()
+    }
     /// See [`EnergyTerm::before_step`].
     fn before_step(&mut self, _state: &EvalState) {}
     /// See [`EnergyTerm::check_converged_step`].
@@ -416,10 +422,12 @@ impl<P: Potential<N>, const N: usize> EnergyTerm for PotentialTerm<P, N> {
             // where the potential has them, hyper-duals otherwise).
             element_derivatives(&self.potential, e, &stencil, false, &mut d);
             let maps: [NodeMap; N] = stencil.nodes.map(|node| node.map(state));
-            let projection = if project {
-                MapProjection::Full
-            } else {
-                MapProjection::None
+            // A convex element's `JᵀHJ` is positive semi-definite already: only the rotation's
+            // second-order terms need projecting.
+            let projection = match (mode == EvalMode::ProjectedHessian, self.potential.is_element_convex(e)) {
+                (false, _) => MapProjection::None,
+                (true, true) => MapProjection::SecondOrderOnly,
+                (true, false) => MapProjection::Full,
             };
             map_element(&maps, &d, dt, width_of_stride(o.len()), projection, o);
             return;

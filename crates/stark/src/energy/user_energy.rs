@@ -480,6 +480,84 @@ mod tests {
         assert!(!fourth.timings.from_disk, "a file made from another graph is rejected");
     }
 
+    /// One free point and two rigid bodies at random poses and velocities.
+    fn two_random_bodies(seed: u64) -> TestState {
+        let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
+        let mut bodies = BodyArrays::default();
+        for _ in 0..2 {
+            bodies.position.push(rvec(&mut rng, 1.0));
+            bodies
+                .orientation
+                .push(UnitQuaternion::from_scaled_axis(rvec(&mut rng, 2.0)));
+            bodies.velocity.push(rvec(&mut rng, 1.0));
+            bodies.angular_velocity.push(rvec(&mut rng, 2.0));
+            bodies.mass.push(1.0);
+            bodies.inertia_local.push(Matrix3::identity());
+            bodies.force.push(Vector3::zeros());
+            bodies.torque.push(Vector3::zeros());
+            bodies.acceleration.push(Vector3::zeros());
+            bodies.angular_acceleration.push(Vector3::zeros());
+        }
+        let body_v: Vec<_> = (0..2).map(|_| (rvec(&mut rng, 1.0), rvec(&mut rng, 2.0))).collect();
+        TestState::new(
+            vec![Vector3::x()],
+            vec![Vector3::x()],
+            vec![Vector3::zeros()],
+            vec![Vector3::y()],
+            0.01,
+        )
+        .with_bodies(bodies, &body_v)
+    }
+
+    /// A convex element on rigid bodies (`½k‖x_b − x_a‖²`, stretched: its force makes the
+    /// bodies' second-order rotation terms indefinite) is indefinite in the exact mode and
+    /// positive semi-definite in the projected one, where only those terms are projected.
+    #[test]
+    fn a_convex_element_on_rigid_bodies_is_projected_in_its_rotation_terms() {
+        struct Tie([Node; 2]);
+        impl Potential<2> for Tie {
+            fn name(&self) -> &str {
+                "tie"
+            }
+            fn num_elements(&self) -> usize {
+                1
+            }
+            fn nodes(&self, _e: usize) -> [Node; 2] {
+                self.0
+            }
+            fn energy<S: Scalar>(&self, _e: usize, x: &[Vec3<S>; 2], _st: &Stencil<2>) -> S {
+                (x[1] - x[0]).norm_sq() * 500.0
+            }
+            fn is_convex(&self) -> bool {
+                true
+            }
+        }
+        let st = two_random_bodies(5);
+        let eval = st.eval();
+        let term = PotentialTerm::new(Tie([
+            Node::rigid(0, &Vector3::new(0.1, 0.0, 0.05)),
+            Node::rigid(1, &Vector3::new(-0.1, 0.02, 0.0)),
+        ]));
+        let w = term.stencil_width(&eval);
+        let hessian = |mode| {
+            let mut out = vec![0.0; crate::energy::term::element_stride(w)];
+            term.evaluate_element(0, &eval, mode, &mut out);
+            let (n, base) = (3 * w, 1 + 3 * w);
+            let mut h = vec![0.0; n * n];
+            for a in 0..w {
+                for b in 0..w {
+                    for k in 0..9 {
+                        h[(3 * a + k / 3) * n + 3 * b + k % 3] = out[base + 9 * (a * w + b) + k];
+                    }
+                }
+            }
+            h
+        };
+        use crate::energy::psd::is_positive_semidefinite;
+        assert!(!is_positive_semidefinite(&hessian(EvalMode::ExactHessian), 3 * w));
+        assert!(is_positive_semidefinite(&hessian(EvalMode::ProjectedHessian), 3 * w));
+    }
+
     /// The same energy on rigid-body points: the JIT term and a hyper-dual potential give the
     /// same DOF-space value, gradient and projected Hessian through the kinematic map.
     #[test]
@@ -501,31 +579,7 @@ mod tests {
                 spring(x, &v, dt, &[S::constant(50.0), S::constant(0.3), S::constant(2.0)])
             }
         }
-        let mut rng = rand::rngs::StdRng::seed_from_u64(11);
-        let mut bodies = BodyArrays::default();
-        for _ in 0..2 {
-            bodies.position.push(rvec(&mut rng, 1.0));
-            bodies
-                .orientation
-                .push(UnitQuaternion::from_scaled_axis(rvec(&mut rng, 2.0)));
-            bodies.velocity.push(rvec(&mut rng, 1.0));
-            bodies.angular_velocity.push(rvec(&mut rng, 2.0));
-            bodies.mass.push(1.0);
-            bodies.inertia_local.push(Matrix3::identity());
-            bodies.force.push(Vector3::zeros());
-            bodies.torque.push(Vector3::zeros());
-            bodies.acceleration.push(Vector3::zeros());
-            bodies.angular_acceleration.push(Vector3::zeros());
-        }
-        let body_v: Vec<_> = (0..2).map(|_| (rvec(&mut rng, 1.0), rvec(&mut rng, 2.0))).collect();
-        let st = TestState::new(
-            vec![Vector3::x()],
-            vec![Vector3::x()],
-            vec![Vector3::zeros()],
-            vec![Vector3::y()],
-            0.01,
-        )
-        .with_bodies(bodies, &body_v);
+        let st = two_random_bodies(11);
         let eval = st.eval();
         let elements = vec![
             [

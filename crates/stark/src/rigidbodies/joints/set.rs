@@ -128,6 +128,10 @@ impl Potential<4> for JointSet {
     fn name(&self) -> &str {
         "joints"
     }
+    fn is_element_convex(&self, e: usize) -> bool {
+        // Quadratic in the nodes' positions: `½k‖x_b − x_a‖²`, `½k‖d_b − d_a‖²` (d = a1 − a0).
+        matches!(self.elements[e].primitive, Primitive::Point | Primitive::Direction)
+    }
     fn save_state(&self) -> Vec<u8> {
         // Hardened stiffnesses, targets and world anchors (`set_*` between steps, time events),
         // servo targets and the last readouts (the joint log's next line depends on nothing else).

@@ -404,7 +404,6 @@ impl CholeskySolver {
             self.fresh_orderings += usize::from(fresh);
         }
         let an = self.analysis.as_ref().expect("analysis present");
-        let symbolic = &an.symbolic_llt;
         self.values.clear();
         self.values
             .extend(an.source.iter().map(|&(blk, e)| a.values[blk as usize][e as usize]));
@@ -438,29 +437,43 @@ impl CholeskySolver {
             }
             self.single_precision_fallbacks += 1;
         }
-        let req = StackReq::any_of(&[
-            symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()),
-            symbolic.solve_in_place_scratch::<f64>(1, par),
-        ]);
-        let buffer = workspace(&mut self.workspace, req, par)?;
-        self.factor.resize(an.symbolic_llt.len_val(), 0.0);
-        let mat = SparseColMatRef::new(an.symbolic_matrix.as_ref(), &self.values);
-        an.symbolic_llt
-            .factorize_numeric_llt(
-                &mut self.factor,
-                mat,
-                Side::Lower,
-                Default::default(),
-                par,
-                MemStack::new(buffer),
-                Default::default(),
-            )
-            .map_err(|e| CholeskyError::NotPositiveDefinite(format!("{e:?}")))?;
+        let buffer = factorise_numeric(an, &self.values, &mut self.factor, &mut self.workspace, par)
+            .map_err(CholeskyError::NotPositiveDefinite)?;
         self.factored = true;
         x.copy_from_slice(b);
         Self::solve_with_factor(an, &self.factor, x, &mut self.scratch, par, buffer);
         Ok(())
     }
+}
+
+/// The numeric factorisation `L Lᵀ` of `values` (the lower triangle in `an`'s pattern) into
+/// `factor`, in `T`'s precision, with the workspace in `slot` (sized for the solves too).
+fn factorise_numeric<'w, T: faer::traits::ComplexField + Copy + Default>(
+    an: &Analysis,
+    values: &[T],
+    factor: &mut Vec<T>,
+    slot: &'w mut Option<(MemBuffer, Par, usize)>,
+    par: Par,
+) -> Result<&'w mut MemBuffer, String> {
+    let symbolic = &an.symbolic_llt;
+    let req = StackReq::any_of(&[
+        symbolic.factorize_numeric_llt_scratch::<T>(par, Default::default()),
+        symbolic.solve_in_place_scratch::<T>(1, par),
+    ]);
+    let buffer = workspace(slot, req, par).map_err(|e| e.to_string())?;
+    factor.resize(symbolic.len_val(), T::default());
+    symbolic
+        .factorize_numeric_llt(
+            factor,
+            SparseColMatRef::new(an.symbolic_matrix.as_ref(), values),
+            Side::Lower,
+            Default::default(),
+            par,
+            MemStack::new(buffer),
+            Default::default(),
+        )
+        .map_err(|e| format!("{e:?}"))?;
+    Ok(buffer)
 }
 
 impl SingleFactor {
@@ -491,24 +504,8 @@ impl SingleFactor {
             self.values
                 .extend((col_ptr[j]..col_ptr[j + 1]).map(|k| (values[k] * self.scale[row_idx[k]] * sj) as f32));
         }
-        let symbolic = &an.symbolic_llt;
-        let req = StackReq::any_of(&[
-            symbolic.factorize_numeric_llt_scratch::<f32>(par, Default::default()),
-            symbolic.solve_in_place_scratch::<f32>(1, par),
-        ]);
-        let buffer = workspace(&mut self.workspace, req, par)?;
-        self.factor.resize(symbolic.len_val(), 0.0);
-        symbolic
-            .factorize_numeric_llt(
-                &mut self.factor,
-                SparseColMatRef::new(m.as_ref(), &self.values),
-                Side::Lower,
-                Default::default(),
-                par,
-                MemStack::new(buffer),
-                Default::default(),
-            )
-            .map_err(|e| CholeskyError::NotPositiveDefinite(format!("single precision: {e:?}")))?;
+        factorise_numeric(an, &self.values, &mut self.factor, &mut self.workspace, par)
+            .map_err(|e| CholeskyError::NotPositiveDefinite(format!("single precision: {e}")))?;
         self.factored = true;
         Ok(())
     }
