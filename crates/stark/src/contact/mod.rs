@@ -65,7 +65,8 @@ crate::params::documented_struct! {
         pub friction_iterations: usize,
         /// Positive semi-definite Hessian used for barrier pairs far from the solution and whenever
         /// the solver projects: `exact`, `projected`, `gauss_newton` or `adaptive` (default:
-        /// `adaptive`); near the solution (once Newton took a full step, see
+        /// `adaptive`; `adaptive` and `gauss_newton` turn `projected` for the rest of a time step
+        /// once Newton's steps keep being cut short there); near the solution (once Newton took a full step, see
         /// `NewtonSettings::definite_far_from_solution`) the pairs take their exact Hessian.
         pub hessian: PairHessian,
         /// Continuous collision detection in the line search (default: true). Without it only the
@@ -213,6 +214,9 @@ pub struct Contact {
     /// Newton asked for the barrier pairs' positive semi-definite Hessian, `settings.hessian`
     /// (`use_definite_hessian`); otherwise they take their exact one.
     definite_barriers: bool,
+    /// The definite form is the projected one for the rest of the time step (see
+    /// `EnergyTerm::tighten_definite_form`).
+    definite_projected: bool,
     /// Statistics.
     pub stats: ContactStats,
 }
@@ -246,6 +250,7 @@ impl Default for Contact {
             relag_pending: false,
             lag_solves: 0,
             definite_barriers: true,
+            definite_projected: false,
             stats: ContactStats {
                 min_distance_m: f64::INFINITY,
                 min_ccd_fraction: 1.0,

@@ -88,6 +88,8 @@ impl EnergyTerm for Contact {
         // solver projects anyway when the total turns out indefinite.
         let hessian = if mode == EvalMode::ExactHessian && !self.definite_barriers {
             PairHessian::Exact
+        } else if self.definite_projected {
+            PairHessian::Projected
         } else {
             self.settings.hessian
         };
@@ -147,6 +149,7 @@ impl EnergyTerm for Contact {
         }
         self.rigid_split = self.split_rigid(state);
         self.validity_record = (0, 0, 0.0);
+        self.definite_projected = false;
         if self.relag_pending {
             self.relag_pending = false;
         } else {
@@ -175,6 +178,13 @@ impl EnergyTerm for Contact {
         let changed =
             self.definite_barriers != on && self.settings.hessian != PairHessian::Exact && !self.pairs.is_empty();
         self.definite_barriers = on;
+        changed
+    }
+    fn tighten_definite_form(&mut self) -> bool {
+        let changed = !self.definite_projected
+            && matches!(self.settings.hessian, PairHessian::Adaptive | PairHessian::GaussNewton)
+            && !self.pairs.is_empty();
+        self.definite_projected = true;
         changed
     }
     fn has_definite_form(&self) -> bool {

@@ -91,6 +91,14 @@ pub trait EnergyTerm: Send + Sync {
         false
     }
 
+    /// Newton's steps under the definite form were cut short again and again in this time step:
+    /// a term whose definite form is a cheap approximation (contact's Gauss–Newton barrier
+    /// Hessians) switches to its closer form (projected) until the next time step. Returns
+    /// whether the term assembles anything different now.
+    fn tighten_definite_form(&mut self) -> bool {
+        false
+    }
+
     /// Whether [`use_definite_hessian`](Self::use_definite_hessian) can change what this term
     /// assembles (it has such a form and elements to use it on).
     fn has_definite_form(&self) -> bool {
