@@ -58,14 +58,9 @@ impl Contact {
                     triangle_swept_aabb(a.0, b.0, c.0, a.1, b.1, c.1, grow(o))
                 })
                 .collect();
-            let found = Bvh::build(&point_boxes).pairs_with(&Bvh::build(&tri_boxes), 0.0);
-            c.point_triangle = found
-                .into_par_iter()
-                .filter(|&(pi, ti)| {
-                    self.pair_ok(self.point_obj[pi], self.tri_obj[ti]) && !self.triangles[ti].contains(&self.points[pi])
-                })
-                .map(|(pi, ti)| (pi as u32, ti as u32))
-                .collect();
+            c.point_triangle = Bvh::build(&point_boxes).pairs_with_where(&Bvh::build(&tri_boxes), 0.0, |pi, ti| {
+                self.pair_ok(self.point_obj[pi], self.tri_obj[ti]) && !self.triangles[ti].contains(&self.points[pi])
+            });
         }
         if self.edges.len() > 1 {
             let edge_boxes: Vec<Aabb> = self
@@ -77,15 +72,10 @@ impl Contact {
                     edge_swept_aabb(a.0, b.0, a.1, b.1, grow(o))
                 })
                 .collect();
-            let found = Bvh::build(&edge_boxes).self_pairs(0.0);
-            c.edge_edge = found
-                .into_par_iter()
-                .filter(|&(i, j)| {
-                    let (ea, eb) = (self.edges[i], self.edges[j]);
-                    self.pair_ok(self.edge_obj[i], self.edge_obj[j]) && !ea.iter().any(|v| eb.contains(v))
-                })
-                .map(|(i, j)| (i as u32, j as u32))
-                .collect();
+            c.edge_edge = Bvh::build(&edge_boxes).self_pairs_where(0.0, |i, j| {
+                let (ea, eb) = (self.edges[i], self.edges[j]);
+                self.pair_ok(self.edge_obj[i], self.edge_obj[j]) && !ea.iter().any(|v| eb.contains(v))
+            });
         }
         c
     }

@@ -286,6 +286,31 @@ impl Bvh {
         (pairs, tests)
     }
 
+    /// [`Bvh::self_pairs`] restricted to the pairs `keep` accepts, as `u32` indices; the filter
+    /// runs before the sort (in a mesh's self pairs most overlapping boxes are neighbours').
+    pub fn self_pairs_where(&self, radius: f64, keep: impl Fn(usize, usize) -> bool + Sync) -> Vec<(u32, u32)> {
+        if self.nodes.len() < 2 {
+            return Vec::new();
+        }
+        let (pairs, _) = self.self_traverse(0, 2.0 * radius.max(0.0));
+        sorted_kept(pairs, keep)
+    }
+
+    /// [`Bvh::pairs_with`] restricted to the pairs `keep` accepts, as `u32` indices; the filter
+    /// runs before the sort.
+    pub fn pairs_with_where(
+        &self,
+        other: &Bvh,
+        radius: f64,
+        keep: impl Fn(usize, usize) -> bool + Sync,
+    ) -> Vec<(u32, u32)> {
+        if self.nodes.is_empty() || other.nodes.is_empty() {
+            return Vec::new();
+        }
+        let (pairs, _) = cross_traverse(self, 0, other, 0, 2.0 * radius.max(0.0), false);
+        sorted_kept(pairs, keep)
+    }
+
     /// All pairs `(i, j)` with `i` a primitive of `self` and `j` one of `other` whose boxes overlap
     /// after each is grown by `radius`, sorted by `(i, j)`. Runs in parallel.
     pub fn pairs_with(&self, other: &Bvh, radius: f64) -> Vec<(usize, usize)> {
@@ -368,6 +393,19 @@ fn cross_traverse(ta: &Bvh, a: usize, tb: &Bvh, b: usize, margin: f64, ordered: 
     };
     let (pairs, tests) = merge(x, y);
     (pairs, tests + 1)
+}
+
+/// The pairs `keep` accepts, sorted by `(i, j)` without duplicates (sorted as one `u64` key
+/// each: indices fit in 32 bits, primitives are counted in `u32` elsewhere too).
+fn sorted_kept(pairs: Vec<(usize, usize)>, keep: impl Fn(usize, usize) -> bool + Sync) -> Vec<(u32, u32)> {
+    let mut keys: Vec<u64> = pairs
+        .into_par_iter()
+        .filter(|&(i, j)| keep(i, j))
+        .map(|(i, j)| ((i as u64) << 32) | j as u64)
+        .collect();
+    keys.par_sort_unstable();
+    keys.dedup();
+    keys.into_iter().map(|k| ((k >> 32) as u32, k as u32)).collect()
 }
 
 /// Sequential simultaneous traversal of subtree `a` of `ta` and subtree `b` of `tb`.
