@@ -351,7 +351,8 @@ fn run_built(sim: &mut Simulation, duration: f64, opts: &RunOptions, check: bool
     let out = sim.settings.output.directory.clone();
     let mut check_report = CheckReport::default();
     let mut grasp = grasp::GraspRun::find(sim);
-    let end = run_with_progress(sim, duration, opts, check.then_some(&mut check_report), grasp.as_mut())?;
+    let end =
+        sim.in_pool(|sim| run_with_progress(sim, duration, opts, check.then_some(&mut check_report), grasp.as_mut()))?;
     if let Some(g) = grasp.as_mut() {
         // The callback runs before each step; this watches the state after the last one.
         g.after_step(sim);
