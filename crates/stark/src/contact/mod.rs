@@ -66,8 +66,9 @@ crate::params::documented_struct! {
         /// Positive semi-definite Hessian used for barrier pairs far from the solution and whenever
         /// the solver projects: `exact`, `projected`, `gauss_newton` or `adaptive` (default:
         /// `adaptive`; `adaptive` and `gauss_newton` turn `projected` for the rest of a time step
-        /// once Newton's steps keep being cut short there); near the solution (once Newton took a full step, see
-        /// `NewtonSettings::definite_far_from_solution`) the pairs take their exact Hessian.
+        /// once Newton's steps keep being cut short or keep raising the residual there); near the
+        /// solution (once Newton took a full step, see `NewtonSettings::definite_far_from_solution`)
+        /// the pairs take their exact Hessian.
         pub hessian: PairHessian,
         /// Continuous collision detection in the line search (default: true). Without it only the
         /// barrier keeps pairs apart, which fast motion can tunnel through.
