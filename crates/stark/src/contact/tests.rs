@@ -342,3 +342,62 @@ fn pairs_come_in_one_order_from_any_covering_candidates() {
     assert!(after > 100, "{after} pairs at the larger thickness");
     assert_eq!(after, new);
 }
+
+#[test]
+fn a_tightened_definite_form_is_the_projected_one_until_the_next_step() {
+    use crate::energy::EvalMode;
+    let mut settings = Settings::default();
+    settings.contact.default_thickness_m = Some(1e-3);
+    let mut sim = Simulation::new(settings).unwrap();
+    // A corner 0.4 mm above the middle of a large triangle: a point–triangle pair far closer than
+    // the triangle's size, where `adaptive` takes the Gauss–Newton form.
+    let lower = [
+        Vector3::new(-1.0, -1.0, 0.0),
+        Vector3::new(1.0, -1.0, 0.0),
+        Vector3::new(0.0, 1.0, 0.0),
+    ];
+    let upper = [
+        Vector3::new(0.05, 0.0, 4e-4),
+        Vector3::new(0.5, 0.1, 0.6),
+        Vector3::new(-0.3, 0.4, 0.7),
+    ];
+    sim.add_prescribed_surface("lower", &lower, &[[0, 1, 2]], 1e-3, 1e4)
+        .unwrap();
+    sim.add_prescribed_surface("upper", &upper, &[[0, 1, 2]], 1e-3, 1e4)
+        .unwrap();
+    let masses_kg = vec![1e-3; sim.nodes.len()];
+    sim.contact.initialize_stiffness(&masses_kg, 0.01, 9.81);
+    at_rest(&mut sim, |contact, state| {
+        contact.before_step(state);
+        contact.prepare_evaluation(state);
+        assert_eq!(contact.pairs().len(), 1, "one point–triangle pair");
+        let hessian = |contact: &mut super::Contact| {
+            let mut out = vec![0.0; crate::energy::term::element_stride(4)];
+            contact.evaluate_element(0, state, EvalMode::ExactHessian, &mut out);
+            out
+        };
+        contact.use_definite_hessian(true);
+        let adaptive = hessian(contact);
+        assert!(contact.tighten_definite_form(), "the pair's form changes");
+        assert!(!contact.tighten_definite_form(), "once");
+        let tightened = hessian(contact);
+        // The projected form keeps the positive part of the distance's curvature term that the
+        // Gauss–Newton form drops: the matrices differ beyond rounding.
+        let diff = adaptive
+            .iter()
+            .zip(&tightened)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        let scale = adaptive.iter().map(|a| a.abs()).fold(0.0, f64::max);
+        assert!(
+            diff > 1e-9 * scale,
+            "tightened form equals the adaptive one: {diff:e} of {scale:e}"
+        );
+        // The gradient is the same: only the Hessian's form changes.
+        assert_eq!(adaptive[..13], tightened[..13]);
+        // The next time step starts from the configured form.
+        contact.before_step(state);
+        contact.prepare_evaluation(state);
+        assert_eq!(hessian(contact), adaptive);
+    });
+}

@@ -128,29 +128,6 @@ pub fn integrate_orientation(q0: &UnitQuaternion<f64>, w: &Vector3<f64>, dt: f64
     UnitQuaternion::from_quaternion(q)
 }
 
-/// Rotation matrix `R(normalize(q0 + ½·dt·(0, ω) ⊗ q0))`, generic over the scalar type, as rows.
-pub fn rotation_after<S: Scalar>(q0: &UnitQuaternion<f64>, w: &[S; 3], dt: f64) -> [[S; 3]; 3] {
-    let (w0, u) = (q0.w, q0.imag());
-    let h = 0.5 * dt;
-    // (0, ω) ⊗ (w0, u) = (−ω·u, w0·ω + ω × u)
-    let qw = S::constant(w0) - (w[0] * u.x + w[1] * u.y + w[2] * u.z) * h;
-    let qx = S::constant(u.x) + (w[0] * w0 + (w[1] * u.z - w[2] * u.y)) * h;
-    let qy = S::constant(u.y) + (w[1] * w0 + (w[2] * u.x - w[0] * u.z)) * h;
-    let qz = S::constant(u.z) + (w[2] * w0 + (w[0] * u.y - w[1] * u.x)) * h;
-    rotation_of_unnormalized(qw, qx, qy, qz)
-}
-
-/// Rotation matrix of the unnormalised quaternion `(w, x, y, z)`, as rows.
-pub fn rotation_of_unnormalized<S: Scalar>(w: S, x: S, y: S, z: S) -> [[S; 3]; 3] {
-    let s = (w * w + x * x + y * y + z * z).recip() * 2.0;
-    let one = S::constant(1.0);
-    [
-        [one - s * (y * y + z * z), s * (x * y - z * w), s * (x * z + y * w)],
-        [s * (x * y + z * w), one - s * (x * x + z * z), s * (y * z - x * w)],
-        [s * (x * z - y * w), s * (y * z + x * w), one - s * (x * x + y * y)],
-    ]
-}
-
 /// How one element node depends on the DOFs.
 #[derive(Clone, Copy, Debug)]
 pub enum NodeMap<'a> {

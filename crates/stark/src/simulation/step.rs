@@ -145,11 +145,7 @@ impl Simulation {
         // Everything parallel in the step (lagged quantities, contact detection, the solve, the
         // checks and end-of-step updates) runs in the simulation's pool, so `threads` bounds it
         // and no work wakes rayon's global pool.
-        match self.pool.clone() {
-            Some(pool) if pool.current_thread_index().is_none() => pool.install(|| self.step_in_pool()),
-            // No pool of its own, or already on it (`in_pool`).
-            _ => self.step_in_pool(),
-        }
+        self.in_pool(Self::step_in_pool)
     }
 
     /// Run `f` on the simulation's own thread pool, so that the steps it takes start there
@@ -159,6 +155,7 @@ impl Simulation {
     pub fn in_pool<R: Send>(&mut self, f: impl FnOnce(&mut Simulation) -> R + Send) -> R {
         match self.pool.clone() {
             Some(pool) if pool.current_thread_index().is_none() => pool.install(|| f(self)),
+            // No pool of its own, or already on it.
             _ => f(self),
         }
     }
