@@ -10,7 +10,6 @@
 
 use super::dual::HyperDual;
 use super::psd::project_psd;
-use super::scalar::Scalar;
 use crate::state::{
     angular_block, linear_block, positions_from_velocities, rigid_body_of, BodyArrays, NodeArrays, NO_DOF,
 };
