@@ -376,6 +376,7 @@ pub fn map_element<const N: usize>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::energy::scalar::Scalar;
 
     fn pose_at(w: &Vector3<f64>) -> (BodyPose, UnitQuaternion<f64>) {
         let q0 = UnitQuaternion::from_euler_angles(0.3, -0.7, 1.1);
