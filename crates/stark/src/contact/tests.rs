@@ -91,13 +91,25 @@ fn trial_states_with_rigid_crossings_are_invalid() {
 /// Newton's `use_definite_hessian` switch: on (far from the solution), a pair whose distance
 /// curves assembles a positive semi-definite Hessian; off (near it), the exact one, whose
 /// negative curvature across the pair the inertia carries.
+/// A simulation of two prescribed triangles (1 mm contact thickness, 1 g per node for the
+/// barrier stiffness).
+fn two_prescribed_triangles(lower: [Vector3<f64>; 3], upper: [Vector3<f64>; 3]) -> Simulation {
+    let mut settings = Settings::default();
+    settings.contact.default_thickness_m = Some(1e-3);
+    let mut sim = Simulation::new(settings).unwrap();
+    sim.add_prescribed_surface("lower", &lower, &[[0, 1, 2]], 1e-3, 1e4)
+        .unwrap();
+    sim.add_prescribed_surface("upper", &upper, &[[0, 1, 2]], 1e-3, 1e4)
+        .unwrap();
+    let masses_kg = vec![1e-3; sim.nodes.len()];
+    sim.contact.initialize_stiffness(&masses_kg, 0.01, 9.81);
+    sim
+}
+
 #[test]
 fn barrier_pairs_take_their_exact_hessian_when_newton_asks() {
     use crate::energy::psd::symmetric_eigen;
     use crate::energy::EvalMode;
-    let mut settings = Settings::default();
-    settings.contact.default_thickness_m = Some(1e-3);
-    let mut sim = Simulation::new(settings).unwrap();
     // Two triangles whose corners face each other 0.4 mm apart: one point–point pair.
     let lower = [
         Vector3::new(0.0, 0.0, 0.0),
@@ -105,12 +117,7 @@ fn barrier_pairs_take_their_exact_hessian_when_newton_asks() {
         Vector3::new(0.0, -1.0, -1.0),
     ];
     let upper = lower.map(|p| Vector3::new(-p.x, -p.y, 4e-4 - p.z));
-    sim.add_prescribed_surface("lower", &lower, &[[0, 1, 2]], 1e-3, 1e4)
-        .unwrap();
-    sim.add_prescribed_surface("upper", &upper, &[[0, 1, 2]], 1e-3, 1e4)
-        .unwrap();
-    let masses_kg = vec![1e-3; sim.nodes.len()];
-    sim.contact.initialize_stiffness(&masses_kg, 0.01, 9.81);
+    let mut sim = two_prescribed_triangles(lower, upper);
     let x = sim.nodes.x.clone();
     assert!(valid_at(&mut sim, &x));
     at_rest(&mut sim, |contact, state| {
@@ -346,9 +353,6 @@ fn pairs_come_in_one_order_from_any_covering_candidates() {
 #[test]
 fn a_tightened_definite_form_is_the_projected_one_until_the_next_step() {
     use crate::energy::EvalMode;
-    let mut settings = Settings::default();
-    settings.contact.default_thickness_m = Some(1e-3);
-    let mut sim = Simulation::new(settings).unwrap();
     // A corner 0.4 mm above the middle of a large triangle: a point–triangle pair far closer than
     // the triangle's size, where `adaptive` takes the Gauss–Newton form.
     let lower = [
@@ -361,12 +365,7 @@ fn a_tightened_definite_form_is_the_projected_one_until_the_next_step() {
         Vector3::new(0.5, 0.1, 0.6),
         Vector3::new(-0.3, 0.4, 0.7),
     ];
-    sim.add_prescribed_surface("lower", &lower, &[[0, 1, 2]], 1e-3, 1e4)
-        .unwrap();
-    sim.add_prescribed_surface("upper", &upper, &[[0, 1, 2]], 1e-3, 1e4)
-        .unwrap();
-    let masses_kg = vec![1e-3; sim.nodes.len()];
-    sim.contact.initialize_stiffness(&masses_kg, 0.01, 9.81);
+    let mut sim = two_prescribed_triangles(lower, upper);
     at_rest(&mut sim, |contact, state| {
         contact.before_step(state);
         contact.prepare_evaluation(state);
