@@ -2,8 +2,9 @@
 //! servo updates, hardening, readouts and the checkpointed state.
 
 use super::{JointElement, JointReadout, Measure, Poses, Primitive};
-use crate::energy::potential::{dual_derivatives, Potential, Stencil};
+use crate::energy::potential::{element_derivatives, FastDerivatives, Potential, Stencil};
 use crate::energy::term::StepCheck;
+use crate::energy::HyperDual;
 use crate::energy::{Node, Scalar, Vec3};
 use crate::error::Result;
 use crate::state::EvalState;
@@ -91,7 +92,8 @@ impl JointSet {
         if !el.enabled {
             return r;
         }
-        let d = dual_derivatives(self, e, &stencil);
+        let mut d = HyperDual::constant(0.0);
+        element_derivatives(self, e, &stencil, false, &mut d);
         let mut f = [Vector3::zeros(); 2];
         let mut t = [Vector3::zeros(); 2];
         for (a, node) in el.nodes.iter().enumerate() {
@@ -203,6 +205,17 @@ impl Potential<4> for JointSet {
             el.primitive.energy(x, stencil, el.stiffness)
         } else {
             S::zero()
+        }
+    }
+    fn derivatives(&self, e: usize, stencil: &Stencil<4>, _project: bool, out: &mut HyperDual<4>) -> FastDerivatives {
+        let el = &self.elements[e];
+        if !el.enabled {
+            *out = HyperDual::constant(0.0);
+            FastDerivatives::Exact
+        } else if el.primitive.quadratic_derivatives(&stencil.x, el.stiffness, out) {
+            FastDerivatives::Exact
+        } else {
+            FastDerivatives::Unavailable
         }
     }
     fn topology_version(&self) -> u64 {
