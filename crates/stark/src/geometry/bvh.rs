@@ -349,16 +349,11 @@ impl Bvh {
         }
     }
 
-    /// Sequential version of [`Bvh::self_traverse`], appending to `out`.
+    /// Sequential version of [`Bvh::self_traverse`], appending to `out`: one explicit stack of
+    /// node pairs, where `(i, i)` stands for the pairs within subtree `i`.
     fn self_traverse_seq(&self, node: usize, margin: f64, out: &mut PairsAndTests) {
-        let n = &self.nodes[node];
-        if n.is_leaf() {
-            return;
-        }
-        let (l, r) = (node + 1, node + n.index);
-        self.self_traverse_seq(l, margin, out);
-        self.self_traverse_seq(r, margin, out);
-        cross_traverse_seq(self, l, self, r, margin, true, out);
+        let mut stack = vec![(node, node)];
+        traverse_stack(self, self, &mut stack, margin, true, out);
     }
 }
 
@@ -410,10 +405,33 @@ fn sorted_kept(pairs: Vec<(usize, usize)>, keep: impl Fn(usize, usize) -> bool +
 
 /// Sequential simultaneous traversal of subtree `a` of `ta` and subtree `b` of `tb`.
 fn cross_traverse_seq(ta: &Bvh, a: usize, tb: &Bvh, b: usize, margin: f64, ordered: bool, out: &mut PairsAndTests) {
-    let mut stack = Vec::with_capacity(128);
-    stack.push((a, b));
+    let mut stack = vec![(a, b)];
+    traverse_stack(ta, tb, &mut stack, margin, ordered, out);
+}
+
+/// Runs the node pairs on `stack` until it is empty: overlapping pairs split the subtree with
+/// more leaves, overlapping leaves are reported. A pair `(i, i)` (only when `ta` and `tb` are one
+/// tree) stands for the pairs within subtree `i`: those of each child and those across them.
+fn traverse_stack(
+    ta: &Bvh,
+    tb: &Bvh,
+    stack: &mut Vec<(usize, usize)>,
+    margin: f64,
+    ordered: bool,
+    out: &mut PairsAndTests,
+) {
+    let same_tree = std::ptr::eq(ta, tb);
     while let Some((a, b)) = stack.pop() {
         let (na, nb) = (&ta.nodes[a], &tb.nodes[b]);
+        if same_tree && a == b {
+            if !na.is_leaf() {
+                let (l, r) = (a + 1, a + na.index);
+                stack.push((l, r));
+                stack.push((r, r));
+                stack.push((l, l));
+            }
+            continue;
+        }
         out.1 += 1;
         if !na.aabb.intersects_within(&nb.aabb, margin) {
             continue;
