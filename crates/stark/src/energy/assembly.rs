@@ -62,7 +62,8 @@ struct TermLayout {
 /// A pointer that may be shared between threads that write disjoint entries.
 #[derive(Clone, Copy)]
 struct Shared<T>(*mut T);
-// SAFETY: only used for writes to disjoint indices, guaranteed by the colouring (see `assemble`).
+// SAFETY: only used for writes to disjoint indices (the colouring, and the mirror slots; see
+// `assemble`).
 unsafe impl<T> Send for Shared<T> {}
 unsafe impl<T> Sync for Shared<T> {}
 
@@ -241,7 +242,7 @@ impl Assembler {
             let m = term_key.2;
             let mut stencils = vec![NO_DOF; t.num_elements() * m];
             t.write_stencils(state, &mut stencils);
-            for s in stencils.iter_mut().filter(|s| **s != NO_DOF) {
+            stencils.par_iter_mut().filter(|s| **s != NO_DOF).for_each(|s| {
                 let dof = dofs.dof_of_block[*s as usize];
                 // A fixed node's block is not an unknown: the element's derivatives with respect
                 // to it are dropped. Any other block that is not an unknown (a rigid node's) has
@@ -253,7 +254,7 @@ impl Assembler {
                     t.name()
                 );
                 *s = dof;
-            }
+            });
             *layout = TermLayout {
                 key: Some(term_key),
                 pairs: None,
@@ -300,9 +301,10 @@ impl Assembler {
             }
             if !same_pattern {
                 self.matrix = BlockSparseMatrix::from_sorted_pairs(n_blocks, &pairs);
+                let matrix = &self.matrix;
                 self.mirror = pairs
-                    .iter()
-                    .map(|&(r, c)| (r > c).then(|| slot_of(&self.matrix, c, r)))
+                    .par_iter()
+                    .map(|&(r, c)| (r > c).then(|| slot_of(matrix, c, r)))
                     .collect();
                 self.pattern_id = NEXT_PATTERN_ID.fetch_add(1, Ordering::Relaxed);
             }
@@ -315,16 +317,20 @@ impl Assembler {
             let n = t.num_elements();
             if changed || !same_pattern {
                 layout.slots = vec![NO_SLOT; n * m * m];
-                for e in 0..n {
-                    let st = &layout.stencils[e * m..(e + 1) * m];
-                    for a in 0..m {
-                        for b in 0..m {
-                            if st[a] != NO_DOF && st[b] != NO_DOF && st[a] <= st[b] {
-                                layout.slots[(e * m + a) * m + b] = slot_of(matrix, st[a], st[b]);
+                let stencils = &layout.stencils;
+                layout
+                    .slots
+                    .par_chunks_mut((m * m).max(1))
+                    .zip(stencils.par_chunks(m.max(1)))
+                    .for_each(|(slots, st)| {
+                        for a in 0..m {
+                            for b in 0..m {
+                                if st[a] != NO_DOF && st[b] != NO_DOF && st[a] <= st[b] {
+                                    slots[a * m + b] = slot_of(matrix, st[a], st[b]);
+                                }
                             }
                         }
-                    }
-                }
+                    });
             }
             if !changed {
                 continue;
@@ -370,8 +376,12 @@ impl Assembler {
     ) -> Assembled {
         self.ensure_layout(terms, state, dofs);
         let t0 = std::time::Instant::now();
-        gradient.iter_mut().for_each(|g| *g = 0.0);
-        self.matrix.values.iter_mut().for_each(|v| *v = [0.0; 9]);
+        gradient.par_iter_mut().with_min_len(4096).for_each(|g| *g = 0.0);
+        self.matrix
+            .values
+            .par_iter_mut()
+            .with_min_len(4096)
+            .for_each(|v| *v = [0.0; 9]);
         let grad_ptr = Shared(gradient.as_mut_ptr());
         let values_ptr = Shared(self.matrix.values.as_mut_ptr());
         let mut sum = Assembled::default();
@@ -438,13 +448,21 @@ impl Assembler {
         let t1 = std::time::Instant::now();
         self.timing.0 += (t1 - t0).as_secs_f64();
         // Lower triangle: transposes of the upper blocks.
-        let values = &mut self.matrix.values;
-        for (slot, mirror) in self.mirror.iter().enumerate() {
-            if let Some(upper) = *mirror {
-                let u = values[upper as usize];
-                values[slot] = [u[0], u[3], u[6], u[1], u[4], u[7], u[2], u[5], u[8]];
-            }
-        }
+        let values = Shared(self.matrix.values.as_mut_ptr());
+        self.mirror
+            .par_iter()
+            .enumerate()
+            .with_min_len(4096)
+            .for_each(|(slot, mirror)| {
+                if let Some(upper) = *mirror {
+                    // SAFETY: a lower slot is written only here, once, and is never an upper
+                    // slot read by another (mirrors point from below the diagonal to above).
+                    unsafe {
+                        let u = *values.ptr().add(upper as usize);
+                        *values.ptr().add(slot) = [u[0], u[3], u[6], u[1], u[4], u[7], u[2], u[5], u[8]];
+                    }
+                }
+            });
         self.timing.1 += t1.elapsed().as_secs_f64();
         sum
     }
