@@ -31,6 +31,7 @@ use crate::energy::term::{element_stride, NO_DOF};
 use crate::energy::{EnergyTerm, EvalMode};
 use crate::state::EvalState;
 use nalgebra::Vector3;
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// `κ` of every pair of contact objects (symmetric), 0 until chosen.
@@ -224,7 +225,19 @@ impl Contact {
         }
         let w = self.stencil_width(state);
         let mut blocks = vec![NO_DOF; w];
-        let mut out = vec![0.0; element_stride(w)];
+        // The pairs' DOF-space gradients, in parallel (the Hessian form does not change them:
+        // the exact one spares the projections).
+        let mut gradients = vec![0.0; self.pairs.len() * 3 * w];
+        {
+            let this = &*self;
+            gradients.par_chunks_mut(3 * w).enumerate().for_each_init(
+                || vec![0.0; element_stride(w)],
+                |out, (e, g)| {
+                    this.evaluate_element(e, state, EvalMode::ExactHessian, out);
+                    g.copy_from_slice(&out[1..1 + 3 * w]);
+                },
+            );
+        }
         // Kinematic nodes (prescribed obstacles) take any reaction: they are not balanced.
         let kinematic: std::collections::BTreeSet<u32> = self
             .points
@@ -244,7 +257,7 @@ impl Contact {
             } else {
                 element_blocks(&node_maps(&p.nodes, state), &mut blocks);
             }
-            self.evaluate_element(e, state, EvalMode::ProjectedHessian, &mut out);
+            let out = &gradients[3 * w * e..3 * w * (e + 1)];
             let key = keys
                 .binary_search(&sorted_objects(p.objects))
                 .ok()
@@ -253,7 +266,7 @@ impl Contact {
                 if b == NO_DOF {
                     continue;
                 }
-                let g = Vector3::new(out[1 + 3 * k], out[2 + 3 * k], out[3 + 3 * k]);
+                let g = Vector3::new(out[3 * k], out[1 + 3 * k], out[2 + 3 * k]);
                 *barrier_total.entry(b).or_insert_with(Vector3::zeros) += g;
                 if kinematic.contains(&b) {
                     continue;

@@ -32,6 +32,10 @@ const STICKY_PATTERN_GROWTH: f64 = 1.2;
 /// Colours of a greedy colouring; chunks that would need more go to a serial group.
 const MAX_COLORS: usize = 64;
 
+/// Elements of the serial group evaluated in parallel before they are added in order: their
+/// outputs (up to `element_stride(8)` values each) stay within a core's cache.
+const SERIAL_BATCH: usize = 64;
+
 /// Consecutive elements coloured together: evaluated in order on one thread (elements of a mesh
 /// numbered in order are mostly neighbours, so their data stays in cache).
 const CHUNK: usize = 128;
@@ -52,11 +56,18 @@ struct TermLayout {
     slots: Vec<u32>,
     /// Element ranges (chunks) per colour.
     colors: Vec<Vec<(u32, u32)>>,
-    /// Chunks that did not fit in [`MAX_COLORS`] colours, evaluated serially.
+    /// Chunks that did not fit in [`MAX_COLORS`] colours, added serially.
     serial: Vec<(u32, u32)>,
     /// Energy of each element at the last evaluation.
     /// Per element: its energy and the sum of its gradient entries' magnitudes.
     energies: Vec<[f64; 2]>,
+}
+
+impl TermLayout {
+    /// Number of elements in the serial group.
+    fn serial_len(&self) -> usize {
+        self.serial.iter().map(|&(start, end)| (end - start) as usize).sum()
+    }
 }
 
 /// A pointer that may be shared between threads that write disjoint entries.
@@ -432,11 +443,21 @@ impl Assembler {
                     },
                 );
             }
-            let mut buf = vec![0.0; stride];
+            // Elements no colour could take (those sharing a rigid body's blocks with many
+            // others): evaluated in parallel a batch at a time, added in order on this thread.
+            let mut batch = vec![0.0; SERIAL_BATCH.min(layout.serial_len()) * stride];
             for &(start, end) in &layout.serial {
-                for e in start as usize..end as usize {
-                    term.evaluate_element(e, state, mode, &mut buf);
-                    add(e, &buf);
+                let mut first = start as usize;
+                while first < end as usize {
+                    let last = (first + SERIAL_BATCH).min(end as usize);
+                    let outs = &mut batch[..(last - first) * stride];
+                    outs.par_chunks_mut(stride).enumerate().for_each(|(k, out)| {
+                        term.evaluate_element(first + k, state, mode, out);
+                    });
+                    for (k, out) in outs.chunks_exact(stride).enumerate() {
+                        add(first + k, out);
+                    }
+                    first = last;
                 }
             }
             for &[e, g] in &layout.energies {
