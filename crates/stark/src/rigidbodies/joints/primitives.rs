@@ -148,8 +148,9 @@ impl Primitive {
 
     /// Value, gradient and Hessian in closed form for the primitives that are a quadratic
     /// `½k‖Σₐ cₐxₐ‖²` (`Point`: c = (−1, 1, 0, 0); `Direction`: c = (1, −1, −1, 1)), whose Hessian
-    /// is the constant `k cₐc_b I`; `None` for the others (hyper-duals). Ball and fixed joints are
-    /// made of these, and hyper-duals cost ~150 flops per operation at 4 nodes.
+    /// is the constant `k cₐc_b I`, written into `out`; `false` (nothing written) for the others,
+    /// which take hyper-duals. Ball, fixed and hinge joints are made of these, and hyper-duals
+    /// cost ~150 flops per operation at 4 nodes.
     pub fn quadratic_derivatives(&self, x: &[Vector3<f64>; 4], k: f64, out: &mut HyperDual<4>) -> bool {
         let c: [f64; 4] = match self {
             Primitive::Point => [-1.0, 1.0, 0.0, 0.0],

@@ -4,8 +4,7 @@
 use super::{JointElement, JointReadout, Measure, Poses, Primitive};
 use crate::energy::potential::{element_derivatives, FastDerivatives, Potential, Stencil};
 use crate::energy::term::StepCheck;
-use crate::energy::HyperDual;
-use crate::energy::{Node, Scalar, Vec3};
+use crate::energy::{HyperDual, Node, Scalar, Vec3};
 use crate::error::Result;
 use crate::state::EvalState;
 use nalgebra::{UnitQuaternion, Vector3};
