@@ -50,3 +50,29 @@ fn multigrid_results_are_deterministic_and_agree_with_the_direct_solver() {
         "multigrid {amg_m:.3e} m, block-Jacobi CG {block_jacobi_m:.3e} m from the direct solver's positions"
     );
 }
+
+/// Contact on rigid bodies as well: its pairs share the bodies' DOF blocks, so their chunks fall
+/// in small colours and the serial group (evaluated in parallel batches, added in order), and
+/// IPC's stiffness balance evaluates them in parallel.
+#[test]
+fn rigid_body_contact_results_are_deterministic() {
+    let run = |threads: usize| {
+        let scene = find_scene("boxes_on_cloth").unwrap();
+        let mut settings = Settings::default();
+        settings.output.frames = false;
+        settings.output.step_log = false;
+        settings.threads = threads;
+        let mut sim = (scene.build)(settings).unwrap();
+        while sim.time() < 0.25 {
+            sim.step().unwrap();
+        }
+        (
+            sim.nodes.x.clone(),
+            sim.bodies.position.clone(),
+            sim.bodies.orientation.clone(),
+        )
+    };
+    let a = run(1);
+    let b = run(2);
+    assert!(a == b, "states differ between thread counts");
+}
