@@ -88,9 +88,6 @@ fn trial_states_with_rigid_crossings_are_invalid() {
     let _ = b;
 }
 
-/// Newton's `use_definite_hessian` switch: on (far from the solution), a pair whose distance
-/// curves assembles a positive semi-definite Hessian; off (near it), the exact one, whose
-/// negative curvature across the pair the inertia carries.
 /// A simulation of two prescribed triangles (1 mm contact thickness, 1 g per node for the
 /// barrier stiffness).
 fn two_prescribed_triangles(lower: [Vector3<f64>; 3], upper: [Vector3<f64>; 3]) -> Simulation {
@@ -106,6 +103,9 @@ fn two_prescribed_triangles(lower: [Vector3<f64>; 3], upper: [Vector3<f64>; 3]) 
     sim
 }
 
+/// Newton's `use_definite_hessian` switch: on (far from the solution), a pair whose distance
+/// curves assembles a positive semi-definite Hessian; off (near it), the exact one, whose
+/// negative curvature across the pair the inertia carries.
 #[test]
 fn barrier_pairs_take_their_exact_hessian_when_newton_asks() {
     use crate::energy::psd::symmetric_eigen;

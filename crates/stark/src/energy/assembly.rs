@@ -127,6 +127,8 @@ pub struct Assembler {
     pub exact_pattern_next: bool,
     /// Wall time in evaluation (with accumulation) and in completing the matrix, s.
     pub timing: (f64, f64),
+    /// Outputs of a batch of the serial group (every entry is written before it is read).
+    serial_batch: Vec<f64>,
 }
 
 /// Merge two sorted, deduplicated lists into one.
@@ -408,6 +410,7 @@ impl Assembler {
         let grad_ptr = Shared(gradient.as_mut_ptr());
         let values_ptr = Shared(self.matrix.values.as_mut_ptr());
         let mut sum = Assembled::default();
+        let batch = &mut self.serial_batch;
         for (layout, term) in self.layouts.iter_mut().zip(terms) {
             let m = layout.width;
             let stride = element_stride(m);
@@ -457,7 +460,10 @@ impl Assembler {
             }
             // Elements no colour could take (those sharing a rigid body's blocks with many
             // others): evaluated in parallel a batch at a time, added in order on this thread.
-            let mut batch = vec![0.0; SERIAL_BATCH.min(layout.serial_len()) * stride];
+            let batch_len = SERIAL_BATCH.min(layout.serial_len()) * stride;
+            if batch.len() < batch_len {
+                batch.resize(batch_len, 0.0);
+            }
             for &(start, end) in &layout.serial {
                 let mut first = start as usize;
                 while first < end as usize {
