@@ -166,12 +166,74 @@ fn largest_strain_bound<S: Scalar>(e: &Mat3<S>) -> S {
     third + (dev_sq + 1e-20).sqrt() * (2.0f64 / 3.0).sqrt()
 }
 
+/// The elastic part of `ψ` in the invariants `I_C = ‖F‖²_F` and `J = det F` (parameters `μ'`,
+/// `λ'`, `α`).
+fn elastic_density<S: Scalar>(ic: S, j: S, mu_: S, lambda_: S, alpha: S) -> S {
+    mu_ * (ic - 3.0) * 0.5 + lambda_ * (j - alpha).sq() * 0.5 - mu_ * (ic + 1.0).ln() * 0.5
+}
+
+/// Node-space value, gradient and Hessian of `V ψ(I_C, J)` (the elastic energy, no damping or
+/// limiting) by the chain rule through the invariants, with no `9 × 9` Hessian in `F`:
+///
+/// `∂ψ/∂F = 2ψ_I F + ψ_J cof F` and `∂²ψ/∂F² = 2ψ_I 𝕀 + 4ψ_II f fᵀ + 2ψ_IJ (f gᵀ + g fᵀ) +
+/// ψ_JJ g gᵀ + ψ_J ∂²J/∂F²` (`f = vec F`, `g = vec cof F`). With `F = Σ_a x_a w_aᵀ`, node `a`'s
+/// gradient is `P w_a` and block `(a, b)` of the Hessian is `2ψ_I (w_a·w_b) I + p_a s_bᵀ +
+/// q_a t_bᵀ + ψ_J ε·(F (w_a × w_b))`, where `p_a = F w_a`, `q_a = cof F w_a`, `s_b = 4ψ_II p_b +
+/// 2ψ_IJ q_b`, `t_b = 2ψ_IJ p_b + ψ_JJ q_b`, and the last term is the cross-product matrix that
+/// `∂²J/∂F_ic ∂F_jd = ε_ijk ε_cdl F_kl` contracts to. The scalar derivatives `ψ_I … ψ_JJ` are
+/// automatic (the generated kernel of `ψ(I_C, J)`). About half the work of the generated `Ψ(F)`
+/// kernel and its `9 × 9 → 12 × 12` map; equal to it to round-off (tests).
+fn elastic_derivatives_by_invariants(w: &[[f64; 3]; 4], f: &[f64; 9], p: &[f64], out: &mut HyperDual<4>) {
+    let fm = Matrix3::from_row_slice(f);
+    // cof F: its columns are the cross products of F's columns.
+    let (c0, c1, c2) = (fm.column(0), fm.column(1), fm.column(2));
+    let cof = Matrix3::from_columns(&[c1.cross(&c2), c2.cross(&c0), c0.cross(&c1)]);
+    let j = c0.dot(&cof.column(0));
+    let (mut d, mut dd) = ([0.0; 2], [0.0; 4]);
+    let value = generated::tet_psi_invariants(&[fm.norm_squared(), j], p, &mut d, &mut dd);
+    let [psi_i, psi_j] = d;
+    let [psi_ii, psi_ij, _, psi_jj] = dd;
+    let wv: [Vector3<f64>; 4] = w.map(Vector3::from);
+    let pa: [Vector3<f64>; 4] = wv.map(|wa| fm * wa);
+    let qa: [Vector3<f64>; 4] = wv.map(|wa| cof * wa);
+    out.value = value;
+    for a in 0..4 {
+        let g = 2.0 * psi_i * pa[a] + psi_j * qa[a];
+        out.grad[a] = [g.x, g.y, g.z];
+    }
+    let sa: [Vector3<f64>; 4] = std::array::from_fn(|b| 4.0 * psi_ii * pa[b] + 2.0 * psi_ij * qa[b]);
+    let ta: [Vector3<f64>; 4] = std::array::from_fn(|b| 2.0 * psi_ij * pa[b] + psi_jj * qa[b]);
+    for a in 0..4 {
+        for b in a..4 {
+            let mut block = pa[a] * sa[b].transpose() + qa[a] * ta[b].transpose();
+            let diagonal = 2.0 * psi_i * wv[a].dot(&wv[b]);
+            for i in 0..3 {
+                block[(i, i)] += diagonal;
+            }
+            if a != b {
+                // ε_ijk v_k with v = F (w_a × w_b): the cross-product matrix of −ψ_J v.
+                let v = psi_j * (fm * wv[a].cross(&wv[b]));
+                block[(0, 1)] += v.z;
+                block[(1, 0)] -= v.z;
+                block[(0, 2)] -= v.y;
+                block[(2, 0)] += v.y;
+                block[(1, 2)] += v.x;
+                block[(2, 1)] -= v.x;
+            }
+            for i in 0..3 {
+                for k in 0..3 {
+                    out.hess[a][i][b][k] = block[(i, k)];
+                    out.hess[b][k][a][i] = block[(i, k)];
+                }
+            }
+        }
+    }
+}
+
 /// Energy `V ψ(F)` of one tet given its deformation gradient (J).
 pub fn tet_psi<S: Scalar>(f: &Mat3<S>, p: &[S], damped: bool, limiting: Limiting) -> S {
     let (volume, mu_, lambda_, alpha) = (p[0], p[1], p[2], p[3]);
-    let ic = f.frobenius_norm_sq();
-    let j = f.det();
-    let mut psi = mu_ * (ic - 3.0) * 0.5 + lambda_ * (j - alpha).sq() * 0.5 - mu_ * (ic + 1.0).ln() * 0.5;
+    let mut psi = elastic_density(f.frobenius_norm_sq(), f.det(), mu_, lambda_, alpha);
     if damped || limiting != Limiting::Off {
         let e = f.transpose().mul_mat(f).sub_identity(1.0).scale(S::constant(0.5));
         if damped {
@@ -209,8 +271,9 @@ fn mat3_from_flat<S: Scalar>(f: &[S]) -> Mat3<S> {
     Mat([[f[0], f[1], f[2]], [f[3], f[4], f[5]], [f[6], f[7], f[8]]])
 }
 
-/// Generated `Ψ(F)` kernels: elastic only, with damping, and with damping and active limiting.
-pub fn kernels() -> [KernelSpec; 3] {
+/// Generated kernels: `Ψ(F)` elastic only, with damping, and with damping and active limiting;
+/// and the elastic energy in the invariants `(I_C, J)` (see [`elastic_derivatives_by_invariants`]).
+pub fn kernels() -> [KernelSpec; 4] {
     [
         psi_kernel("tet_psi_elastic", |f, p| {
             tet_psi(&mat3_from_flat(f), p, false, Limiting::Off)
@@ -221,6 +284,12 @@ pub fn kernels() -> [KernelSpec; 3] {
         psi_kernel("tet_psi_limited", |f, p| {
             tet_psi(&mat3_from_flat(f), p, true, Limiting::Active)
         }),
+        KernelSpec {
+            name: "tet_psi_invariants",
+            n_inputs: 2,
+            n_params: PSI_PARAMS,
+            energy: |i, p| p[0] * elastic_density(i[0], i[1], p[1], p[2], p[3]),
+        },
     ]
 }
 
@@ -400,6 +469,10 @@ impl Potential<4> for TetStrain {
             let e = fm.transpose().mul_mat(&fm).sub_identity(1.0).scale(0.5);
             largest_strain_bound(&e) > psi[11]
         };
+        if !(limited || damped || project) {
+            elastic_derivatives_by_invariants(&w, &f, psi, out);
+            return FastDerivatives::Exact;
+        }
         let mut g = [0.0; 9];
         let mut h = [0.0; 81];
         let value = if limited {
@@ -524,6 +597,55 @@ mod tests {
             }
         }
         assert!(worst < 1e-12, "largest relative difference {worst:e}");
+    }
+
+    /// The chain rule through the invariants equals the generated `Ψ(F)` kernel mapped to the
+    /// nodes, to round-off, for stretched, compressed and inverted tets.
+    #[test]
+    fn elastic_derivatives_by_invariants_equal_the_generated_kernel() {
+        let mut rng = rand::rngs::StdRng::seed_from_u64(7);
+        let mut worst = 0.0f64;
+        for case in 0..200 {
+            let dm_inv: [[f64; 3]; 3] = std::array::from_fn(|_| std::array::from_fn(|_| rng.random_range(-12.0..12.0)));
+            let w = gradient_weights::<4, 3>(&dm_inv);
+            // F near identity, far from it, and inverted (a reflection) in turn.
+            let spread = [0.1, 0.8, 0.3][case % 3];
+            let mut f: [f64; 9] = std::array::from_fn(|_| rng.random_range(-spread..spread));
+            for i in 0..3 {
+                f[4 * i] += if case % 3 == 2 && i == 0 { -1.0 } else { 1.0 };
+            }
+            let p = [
+                rng.random_range(1e-4..1e-3),
+                3e3,
+                2e4,
+                1.1,
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+                f64::INFINITY,
+                1e3,
+            ];
+            let mut fast = HyperDual::<4>::constant(0.0);
+            elastic_derivatives_by_invariants(&w, &f, &p, &mut fast);
+            let (mut g, mut h) = ([0.0; 9], [0.0; 81]);
+            let value = generated::tet_psi_elastic(&f, &p, &mut g, &mut h);
+            let mut generic = HyperDual::<4>::constant(0.0);
+            map_to_nodes(&w, value, &g, &mut h, false, &mut generic);
+            let rel = |a: &[f64], b: &[f64]| {
+                let scale = b.iter().fold(0.0f64, |m, y| m.max(y.abs()));
+                a.iter().zip(b).fold(0.0f64, |m, (x, y)| m.max((x - y).abs())) / scale
+            };
+            let flat = |d: &HyperDual<4>| d.hess.as_flattened().as_flattened().as_flattened().to_vec();
+            worst = worst
+                .max(rel(&[fast.value], &[generic.value]))
+                .max(rel(fast.gradient_flat(), generic.gradient_flat()))
+                .max(rel(&flat(&fast), &flat(&generic)));
+        }
+        assert!(worst < 1e-11, "largest relative difference {worst:e}");
     }
 
     #[test]

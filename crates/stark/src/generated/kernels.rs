@@ -8707,6 +8707,50 @@ pub fn tet_psi_limited(x: &[f64], p: &[f64], grad: &mut [f64], hess: &mut [f64])
     t[140]
 }
 
+/// Value, gradient and Hessian of `tet_psi_invariants` (2 inputs, 13 parameters, 28 operations).
+pub fn tet_psi_invariants(x: &[f64], p: &[f64], grad: &mut [f64], hess: &mut [f64]) -> f64 {
+    let x: &[f64; 2] = x.try_into().expect("input length");
+    let p: &[f64; 13] = p.try_into().expect("parameter length");
+    let grad: &mut [f64; 2] = grad.try_into().expect("gradient length");
+    let hess: &mut [f64; 4] = hess.try_into().expect("Hessian length");
+    let mut t = [0.0f64; 28];
+    t[0] = x[0] + (-3.0);
+    t[1] = p[1] * t[0];
+    t[2] = t[1] * 0.5;
+    t[3] = -p[3];
+    t[4] = x[1] - p[3];
+    t[5] = t[4] * t[4];
+    t[6] = p[2] * t[5];
+    t[7] = 0.5 * t[6];
+    t[8] = t[2] + t[7];
+    t[9] = x[0] + 1.0;
+    t[10] = t[9].ln();
+    t[11] = p[1] * t[10];
+    t[12] = 0.5 * t[11];
+    t[13] = -t[12];
+    t[14] = t[8] - t[12];
+    t[15] = p[0] * t[14];
+    t[16] = p[0] * 0.5;
+    t[17] = p[1] * t[16];
+    t[18] = 1.0 / t[9];
+    t[19] = t[17] * t[18];
+    t[20] = -t[19];
+    t[21] = p[2] * t[16];
+    t[22] = t[4] * t[21];
+    t[23] = t[22] + t[22];
+    t[24] = t[17] - t[19];
+    t[25] = t[18] * t[18];
+    t[26] = t[17] * t[25];
+    t[27] = t[21] + t[21];
+    grad[0] = t[24];
+    grad[1] = t[23];
+    hess[0] = t[26];
+    hess[2] = 0.0;
+    hess[1] = 0.0;
+    hess[3] = t[27];
+    t[15]
+}
+
 /// Value, gradient and Hessian of `distance_point_point` (6 inputs, 0 parameters, 17 operations).
 pub fn distance_point_point(x: &[f64], p: &[f64], grad: &mut [f64], hess: &mut [f64]) -> f64 {
     let x: &[f64; 6] = x.try_into().expect("input length");
