@@ -32,8 +32,8 @@ use crate::state::{BodyArrays, NodeArrays};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
-/// The format version this build writes and reads.
-pub const CHECKPOINT_FORMAT_VERSION: u32 = 2;
+/// The format version this build writes and reads (3: Newton's initial-guess factor saved).
+pub const CHECKPOINT_FORMAT_VERSION: u32 = 3;
 
 /// First bytes of every checkpoint file.
 const MAGIC: [u8; 8] = *b"STARKCKP";
@@ -90,6 +90,8 @@ pub(crate) struct SimulationState {
     pub settings: Settings,
     pub time_s: f64,
     pub dt_s: f64,
+    /// The factor on the last velocities that makes the next step's initial guess.
+    pub guess_scale: f64,
     #[serde(with = "self_describing")]
     pub summary: RunSummary,
     pub frames_written: usize,

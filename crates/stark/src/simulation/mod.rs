@@ -160,6 +160,9 @@ pub struct Simulation {
     /// In the order added; each fires once.
     spawns: Vec<Spawn>,
     pub(crate) newton: NewtonWorkspace,
+    /// The factor on the last velocities that gives Newton's initial guess (see
+    /// `StepProblem::guess_scale`); part of the checkpointed state.
+    guess_scale: f64,
     velocities: Vec<Vector3<f64>>,
     scratch_x: Vec<Vector3<f64>>,
     scratch_poses: Vec<BodyPose>,
@@ -208,6 +211,7 @@ impl Simulation {
             events: Vec::new(),
             spawns: Vec::new(),
             newton: NewtonWorkspace::default(),
+            guess_scale: 1.0,
             velocities: Vec::new(),
             scratch_x: Vec::new(),
             scratch_poses: Vec::new(),

@@ -174,6 +174,7 @@ impl Simulation {
             settings: self.settings.clone(),
             time_s: self.time,
             dt_s: self.dt,
+            guess_scale: self.guess_scale,
             summary: self.summary.clone(),
             frames_written: self.output.frames_written,
             next_frame_time_s: self.output.next_frame_time,
@@ -242,6 +243,7 @@ impl Simulation {
         self.bodies = state.bodies;
         self.time = state.time_s;
         self.dt = state.dt_s;
+        self.guess_scale = state.guess_scale;
         self.summary = state.summary;
         self.output.frames_written = state.frames_written;
         self.output.next_frame_time = state.next_frame_time_s;

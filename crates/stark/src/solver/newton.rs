@@ -3,7 +3,9 @@
 //! Each iteration: let terms update their active sets, assemble `E`, `∇E` and the projected
 //! Hessian `H`, stop if the force residual `‖∇E‖∞/dt` is below tolerance, solve `H Δv = −∇E`,
 //! then line search: the largest step the terms allow (CCD), halved until the Armijo condition
-//! holds. The initial guess is the previous velocity, shortened to the largest valid fraction.
+//! holds. The initial guess is the previous velocity, shortened to the largest valid fraction
+//! and scaled by the factor that would have fitted the last step best
+//! (`StepProblem::guess_scale`).
 
 use super::linear::amg::{Amg, BlockMotion, NearNullSpace};
 use super::linear::block_sparse::{dot, norm_inf, BlockSparseMatrix};
@@ -165,6 +167,9 @@ pub struct StepProblem<'a> {
     pub time: f64,
     /// Gravity, m/s².
     pub gravity: Vector3<f64>,
+    /// Newton's initial guess is the start-of-step velocities shortened to the largest valid
+    /// fraction, times this factor in `[0, 1]`.
+    pub guess_scale: f64,
 }
 
 impl StepProblem<'_> {
@@ -462,8 +467,9 @@ pub fn solve(
     };
 
     // Initial guess: the previous velocity, as far along it as is valid from rest (v = 0 keeps
-    // every node at x0, which is always valid). CCD checks the chord from x0; rigid points move
-    // on arcs, so the guess is also halved until the terms accept it (`is_valid_state`).
+    // every node at x0, which is always valid), times the hindsight factor (a shorter guess on
+    // the same chord stays valid). CCD checks the chord from x0; rigid points move on arcs, so
+    // the guess is also halved until the terms accept it (`is_valid_state`).
     v.clear();
     v.resize(n, Vector3::zeros());
     problem.place(v, &mut ws.x, &mut ws.poses);
@@ -473,7 +479,7 @@ pub fn solve(
         let t0 = Instant::now();
         let from = problem.state(v, &ws.x, &ws.poses);
         let to = problem.state(&ws.trial_v, &ws.trial_x, &ws.trial_poses);
-        let mut alpha = max_step(terms, &from, &to);
+        let mut alpha = max_step(terms, &from, &to) * problem.guess_scale;
         let start = std::mem::take(&mut ws.trial_v);
         for halving in 0..=MAX_GUESS_HALVINGS {
             if halving == MAX_GUESS_HALVINGS {
@@ -1183,6 +1189,7 @@ mod tests {
             dt: 0.01,
             time: 0.01,
             gravity: Vector3::zeros(),
+            guess_scale: 1.0,
         };
         let mut ws = NewtonWorkspace::default();
         let mut v = Vec::new();
@@ -1242,6 +1249,7 @@ mod tests {
             dt: 0.01,
             time: 0.01,
             gravity: Vector3::zeros(),
+            guess_scale: 1.0,
         };
         let mut term = Fenced {
             target: 0.2,
