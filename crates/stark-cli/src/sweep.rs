@@ -245,9 +245,18 @@ fn spawn(case: &Case, plan: &SweepPlan) -> stark::Result<Child> {
     let dir = plan.run_dir(case);
     std::fs::create_dir_all(&dir).map_err(|e| bad(format!("{}: {e}", dir.display())))?;
     let mut cmd = Command::new(exe);
-    match checkpoint(case, &dir) {
-        Some(ckpt) => {
-            let header = stark::io::read_checkpoint_header(&ckpt)?;
+    // A checkpoint this build cannot read (another format version, a damaged file) cannot be
+    // continued: the case starts afresh (its run overwrites the checkpoint) instead of stopping
+    // the sweep.
+    let resumable = checkpoint(case, &dir).and_then(|ckpt| match stark::io::read_checkpoint_header(&ckpt) {
+        Ok(header) => Some((ckpt, header)),
+        Err(e) => {
+            eprintln!("{}: {e}; the case starts afresh", case.name);
+            None
+        }
+    });
+    match resumable {
+        Some((ckpt, header)) => {
             cmd.arg("resume").arg(&ckpt);
             if let Some(d) = plan.duration_s {
                 // `resume` continues to the scene's duration by default; the sweep's is shorter.

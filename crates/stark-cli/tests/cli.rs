@@ -291,6 +291,36 @@ fn sweep_resumes_an_interrupted_case_from_its_checkpoint() {
     assert_eq!(steps.len() as u64, r["summary"]["steps"].as_u64().unwrap());
 }
 
+/// A checkpoint the build cannot continue (another format version, a damaged file) does not stop
+/// the sweep: the case says so and runs from the start.
+#[test]
+fn sweep_restarts_a_case_whose_checkpoint_it_cannot_read() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("sweep.toml");
+    std::fs::write(
+        &file,
+        "scene = \"rb_point\"\nout = \"runs\"\nresults = \"results\"\nduration_s = 0.1\n",
+    )
+    .unwrap();
+    let run_dir = dir.path().join("runs/rb_point");
+    std::fs::create_dir_all(&run_dir).unwrap();
+    std::fs::write(run_dir.join("rb_point.ckpt"), b"STARKCKP\x7f").unwrap();
+    let out = stark().arg("sweep").arg(&file).output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    let stdout = ok(out);
+    assert!(
+        stderr.contains("rb_point") && stderr.contains("starts afresh"),
+        "{stderr}"
+    );
+    assert!(stdout.contains("done                  rb_point"), "{stdout}");
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("results/rb_point.json")).unwrap()).unwrap();
+    assert!(
+        (r["summary"]["simulated_time_s"].as_f64().unwrap() - 0.1).abs() < 1e-9,
+        "{r}"
+    );
+}
+
 /// CI's short robot–towel case (issue 13): the first 0.3 s of the paper's experiment on carpet
 /// with the flat towel, checked for intersections after every step. The robot lands, its motors
 /// push at their cap and it starts to drive; every step converges to the paper's 1e-6 N.
