@@ -24,6 +24,18 @@ fn ok(out: Output) -> String {
     stdout
 }
 
+/// A sweep file `sweep.toml` with `toml` in `dir`.
+fn write_sweep(dir: &Path, toml: &str) -> std::path::PathBuf {
+    let file = dir.join("sweep.toml");
+    std::fs::write(&file, toml).unwrap();
+    file
+}
+
+/// The result JSON a sweep wrote for `case` in `results`.
+fn case_result(results: &Path, case: &str) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(results.join(format!("{case}.json"))).unwrap()).unwrap()
+}
+
 fn log_lines(path: &Path) -> Vec<serde_json::Value> {
     std::fs::read_to_string(path)
         .unwrap()
@@ -205,9 +217,8 @@ fn sigint_prints_the_summary_keeps_the_logs_and_the_checkpoint_resumes() {
 #[test]
 fn sweep_runs_cases_in_parallel_skips_finished_ones_and_summarises() {
     let dir = tempfile::tempdir().unwrap();
-    let file = dir.path().join("sweep.toml");
-    std::fs::write(
-        &file,
+    let file = write_sweep(
+        dir.path(),
         r#"
 scene = "rb_point"
 out = "runs"
@@ -219,16 +230,14 @@ checkpoint_every_s = 0.05
 [grid]
 "settings.time_step_s" = [0.02, 0.01]
 "#,
-    )
-    .unwrap();
+    );
     let first = ok(stark().arg("sweep").arg(&file).output().unwrap());
     assert!(first.contains("2 cases, 0 finished, 2 to run"), "{first}");
     let results = dir.path().join("results");
     let steps: Vec<u64> = ["rb_point__time_step_s=0.02", "rb_point__time_step_s=0.01"]
         .iter()
         .map(|case| {
-            let text = std::fs::read_to_string(results.join(format!("{case}.json"))).unwrap();
-            let r: serde_json::Value = serde_json::from_str(&text).unwrap();
+            let r = case_result(&results, case);
             assert!(
                 (r["summary"]["simulated_time_s"].as_f64().unwrap() - 0.1).abs() < 1e-12,
                 "{r}"
@@ -254,12 +263,10 @@ checkpoint_every_s = 0.05
 #[test]
 fn sweep_resumes_an_interrupted_case_from_its_checkpoint() {
     let dir = tempfile::tempdir().unwrap();
-    let file = dir.path().join("sweep.toml");
-    std::fs::write(
-        &file,
+    let file = write_sweep(
+        dir.path(),
         "scene = \"rb_point\"\nout = \"runs\"\nresults = \"results\"\nduration_s = 0.2\ncheckpoint_every_s = 0.05\n",
-    )
-    .unwrap();
+    );
     // A run of the case's first 0.1 s, as an interrupted sweep leaves it.
     let run_dir = dir.path().join("runs/rb_point");
     ok(stark()
@@ -279,8 +286,7 @@ fn sweep_resumes_an_interrupted_case_from_its_checkpoint() {
         .unwrap());
     let out = ok(stark().arg("sweep").arg(&file).output().unwrap());
     assert!(out.contains("done                  rb_point"), "{out}");
-    let r: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.path().join("results/rb_point.json")).unwrap()).unwrap();
+    let r = case_result(&dir.path().join("results"), "rb_point");
     // The summary covers the whole run: 0.2 s, the first half from before the resume.
     assert!(
         (r["summary"]["simulated_time_s"].as_f64().unwrap() - 0.2).abs() < 1e-9,
@@ -296,12 +302,10 @@ fn sweep_resumes_an_interrupted_case_from_its_checkpoint() {
 #[test]
 fn sweep_restarts_a_case_whose_checkpoint_it_cannot_read() {
     let dir = tempfile::tempdir().unwrap();
-    let file = dir.path().join("sweep.toml");
-    std::fs::write(
-        &file,
+    let file = write_sweep(
+        dir.path(),
         "scene = \"rb_point\"\nout = \"runs\"\nresults = \"results\"\nduration_s = 0.1\n",
-    )
-    .unwrap();
+    );
     let run_dir = dir.path().join("runs/rb_point");
     std::fs::create_dir_all(&run_dir).unwrap();
     std::fs::write(run_dir.join("rb_point.ckpt"), b"STARKCKP\x7f").unwrap();
@@ -313,8 +317,7 @@ fn sweep_restarts_a_case_whose_checkpoint_it_cannot_read() {
         "{stderr}"
     );
     assert!(stdout.contains("done                  rb_point"), "{stdout}");
-    let r: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.path().join("results/rb_point.json")).unwrap()).unwrap();
+    let r = case_result(&dir.path().join("results"), "rb_point");
     assert!(
         (r["summary"]["simulated_time_s"].as_f64().unwrap() - 0.1).abs() < 1e-9,
         "{r}"
