@@ -18,6 +18,7 @@
 
 use super::{globalize, Groups, NodeSetHandle};
 use crate::energy::deformation::{deformation_gradient, gradient_weights, map_to_nodes};
+use crate::energy::kinematics::{DeformableRow, DerivativeSink};
 use crate::energy::symbolic::{KernelSpec, Sym};
 use crate::energy::{FastDerivatives, HyperDual, Mat, Mat3, Node, Potential, Scalar, Stencil, Vec3};
 use crate::error::{check_param, Result, StarkError};
@@ -183,7 +184,7 @@ fn elastic_density<S: Scalar>(ic: S, j: S, mu_: S, lambda_: S, alpha: S) -> S {
 /// `∂²J/∂F_ic ∂F_jd = ε_ijk ε_cdl F_kl` contracts to. The scalar derivatives `ψ_I … ψ_JJ` are
 /// automatic (the generated kernel of `ψ(I_C, J)`). About half the work of the generated `Ψ(F)`
 /// kernel and its `9 × 9 → 12 × 12` map; equal to it to round-off (tests).
-fn elastic_derivatives_by_invariants(w: &[[f64; 3]; 4], f: &[f64; 9], p: &[f64], out: &mut HyperDual<4>) {
+fn elastic_derivatives_by_invariants(w: &[[f64; 3]; 4], f: &[f64; 9], p: &[f64], out: &mut impl DerivativeSink) {
     let fm = Matrix3::from_row_slice(f);
     // cof F: its columns are the cross products of F's columns.
     let (c0, c1, c2) = (fm.column(0), fm.column(1), fm.column(2));
@@ -196,10 +197,9 @@ fn elastic_derivatives_by_invariants(w: &[[f64; 3]; 4], f: &[f64; 9], p: &[f64],
     let wv: [Vector3<f64>; 4] = w.map(Vector3::from);
     let pa: [Vector3<f64>; 4] = wv.map(|wa| fm * wa);
     let qa: [Vector3<f64>; 4] = wv.map(|wa| cof * wa);
-    out.value = value;
+    out.set_value(value);
     for a in 0..4 {
-        let g = 2.0 * psi_i * pa[a] + psi_j * qa[a];
-        out.grad[a] = [g.x, g.y, g.z];
+        out.set_gradient(a, &(2.0 * psi_i * pa[a] + psi_j * qa[a]));
     }
     let sa: [Vector3<f64>; 4] = std::array::from_fn(|b| 4.0 * psi_ii * pa[b] + 2.0 * psi_ij * qa[b]);
     let ta: [Vector3<f64>; 4] = std::array::from_fn(|b| 2.0 * psi_ij * pa[b] + psi_jj * qa[b]);
@@ -220,12 +220,7 @@ fn elastic_derivatives_by_invariants(w: &[[f64; 3]; 4], f: &[f64; 9], p: &[f64],
                 block[(1, 2)] += v.x;
                 block[(2, 1)] -= v.x;
             }
-            for i in 0..3 {
-                for k in 0..3 {
-                    out.hess[a][i][b][k] = block[(i, k)];
-                    out.hess[b][k][a][i] = block[(i, k)];
-                }
-            }
+            out.set_hessian_pair(a, b, &block);
         }
     }
 }
@@ -397,7 +392,38 @@ impl TetStrain {
     }
 }
 
+/// What a tet's derivatives start from: its kernel parameters, whether damping acts, the
+/// gradient weights (`F = Σ_a x_a w_aᵀ`), `F` and whether the strain limit is active.
+struct TetState {
+    p: [f64; PARAMS],
+    damped: bool,
+    w: [[f64; 3]; 4],
+    f: [f64; 9],
+    limited: bool,
+}
+
 impl TetStrain {
+    fn tet_state(&self, e: usize, stencil: &Stencil<4>) -> TetState {
+        let (p, damped) = self.kernel_params(e, stencil);
+        let dm_inv = [[p[0], p[1], p[2]], [p[3], p[4], p[5]], [p[6], p[7], p[8]]];
+        let w = gradient_weights::<4, 3>(&dm_inv);
+        let mut f = [0.0; 9];
+        deformation_gradient(&w, &stencil.x, &mut f);
+        let limit = p[9 + 11];
+        let limited = limit.is_finite() && {
+            let fm: Mat3<f64> = mat3_from_flat(&f);
+            let e = fm.transpose().mul_mat(&fm).sub_identity(1.0).scale(0.5);
+            largest_strain_bound(&e) > limit
+        };
+        TetState {
+            p,
+            damped,
+            w,
+            f,
+            limited,
+        }
+    }
+
     /// Strain and stress of every tet of the group labelled `label` (in the order they were
     /// added) at positions `x`, for output; `None` without such a group. The stress is the
     /// elastic one (strain limiting included, damping left out): Cauchy `σ = P Fᵀ / J` with
@@ -459,18 +485,26 @@ impl Potential<4> for TetStrain {
         let (p, _) = self.kernel_params(e, stencil);
         tet_energy(x, &p.map(S::constant))
     }
+    fn write_deformable(&self, e: usize, stencil: &Stencil<4>, project: bool, row: &mut DeformableRow) -> bool {
+        if project {
+            return false;
+        }
+        let t = self.tet_state(e, stencil);
+        if t.limited || t.damped {
+            return false;
+        }
+        elastic_derivatives_by_invariants(&t.w, &t.f, &t.p[9..], row);
+        true
+    }
     fn derivatives(&self, e: usize, stencil: &Stencil<4>, project: bool, out: &mut HyperDual<4>) -> FastDerivatives {
-        let (p, damped) = self.kernel_params(e, stencil);
-        let dm_inv = [[p[0], p[1], p[2]], [p[3], p[4], p[5]], [p[6], p[7], p[8]]];
-        let w = gradient_weights::<4, 3>(&dm_inv);
-        let mut f = [0.0; 9];
-        deformation_gradient(&w, &stencil.x, &mut f);
+        let TetState {
+            p,
+            damped,
+            w,
+            f,
+            limited,
+        } = self.tet_state(e, stencil);
         let psi = &p[9..];
-        let limited = psi[11].is_finite() && {
-            let fm: Mat3<f64> = mat3_from_flat(&f);
-            let e = fm.transpose().mul_mat(&fm).sub_identity(1.0).scale(0.5);
-            largest_strain_bound(&e) > psi[11]
-        };
         if !(limited || damped || project) {
             elastic_derivatives_by_invariants(&w, &f, psi, out);
             return FastDerivatives::Exact;
@@ -635,6 +669,56 @@ mod tests {
                 .max(rel(&flat(&fast), &flat(&generic)));
         }
         assert!(worst < 1e-11, "largest relative difference {worst:e}");
+    }
+
+    /// The row written straight in DOF space equals the hyper-dual derivatives mapped by
+    /// `write_deformable_element`, bit for bit, and is written only where it applies (elastic,
+    /// limit inactive, no projection asked).
+    #[test]
+    fn deformable_row_equals_the_mapped_derivatives() {
+        use crate::energy::kinematics::write_deformable_element;
+        use crate::energy::term::element_stride;
+        let mut written = 0;
+        for seed in 0..8 {
+            for stretch in [1.0, 1.6] {
+                let (tets, state) = random_state(seed, stretch);
+                let eval = state.eval();
+                for e in 0..tets.num_elements() {
+                    let stencil = Stencil::new(tets.nodes(e), &eval);
+                    for width in [4, 6] {
+                        let mut direct = vec![f64::NAN; element_stride(width)];
+                        let fast =
+                            tets.write_deformable(e, &stencil, false, &mut DeformableRow::new(4, eval.dt, &mut direct));
+                        // Tet 0 is damped and limited, tet 1 elastic with no limit.
+                        assert_eq!(fast, e == 1, "seed {seed} stretch {stretch} tet {e}");
+                        assert!(!tets.write_deformable(
+                            e,
+                            &stencil,
+                            true,
+                            &mut DeformableRow::new(4, eval.dt, &mut direct.clone())
+                        ));
+                        if !fast {
+                            continue;
+                        }
+                        written += 1;
+                        let mut d = HyperDual::<4>::constant(0.0);
+                        tets.derivatives(e, &stencil, false, &mut d);
+                        let mut mapped = vec![f64::NAN; element_stride(width)];
+                        write_deformable_element(&d, eval.dt, &mut mapped);
+                        // Padding slots' Hessian blocks are never read; everything else is equal.
+                        let read = 1 + 3 * width;
+                        assert_eq!(direct[..read], mapped[..read]);
+                        for a in 0..4 {
+                            for b in 0..4 {
+                                let k = read + 9 * (a * width + b);
+                                assert_eq!(direct[k..k + 9], mapped[k..k + 9], "block ({a}, {b})");
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        assert!(written > 0);
     }
 
     #[test]

@@ -237,6 +237,96 @@ pub fn write_deformable_element<const N: usize>(d: &HyperDual<N>, dt: f64, out: 
     }
 }
 
+/// Where a closed-form element derivative writes, node block by node block: the hyper-dual
+/// layout ([`HyperDual`], position space) or an element row in DOF space ([`DeformableRow`]).
+pub trait DerivativeSink {
+    /// The element's energy, J.
+    fn set_value(&mut self, value: f64);
+    /// Node `a`'s gradient with respect to its position.
+    fn set_gradient(&mut self, a: usize, g: &Vector3<f64>);
+    /// Hessian block `(a, b)`, `a ≤ b`, with respect to the positions of nodes `a` and `b`; block
+    /// `(b, a)` is its transpose. A diagonal block (`a = b`) is taken from its lower triangle.
+    fn set_hessian_pair(&mut self, a: usize, b: usize, block: &Matrix3<f64>);
+}
+
+impl<const N: usize> DerivativeSink for HyperDual<N> {
+    #[inline(always)]
+    fn set_value(&mut self, value: f64) {
+        self.value = value;
+    }
+    #[inline(always)]
+    fn set_gradient(&mut self, a: usize, g: &Vector3<f64>) {
+        self.grad[a] = [g.x, g.y, g.z];
+    }
+    #[inline(always)]
+    fn set_hessian_pair(&mut self, a: usize, b: usize, block: &Matrix3<f64>) {
+        for i in 0..3 {
+            for k in 0..3 {
+                self.hess[a][i][b][k] = block[(i, k)];
+                self.hess[b][k][a][i] = block[(i, k)];
+            }
+        }
+    }
+}
+
+/// The element row of [`write_deformable_element`] written block by block, with no hyper-dual
+/// in between: `∇ᵥ = dt ∇ₓ`, `Hᵥ = dt² Hₓ` (all nodes deformable, in stencil order).
+pub struct DeformableRow<'a> {
+    out: &'a mut [f64],
+    width: usize,
+    dt: f64,
+}
+
+impl<'a> DeformableRow<'a> {
+    /// A row of `n_nodes` nodes over `out` (layout
+    /// [`element_stride`](super::term::element_stride)`(width)`, width from its length): the
+    /// gradient of the padding slots beyond `n_nodes` is zeroed here (their Hessian blocks are
+    /// never read); the caller writes every node's value, gradient and Hessian pairs.
+    pub fn new(n_nodes: usize, dt: f64, out: &'a mut [f64]) -> Self {
+        let width = super::term::width_of_stride(out.len());
+        out[1 + 3 * n_nodes..1 + 3 * width].iter_mut().for_each(|o| *o = 0.0);
+        DeformableRow { out, width, dt }
+    }
+}
+
+impl DerivativeSink for DeformableRow<'_> {
+    #[inline(always)]
+    fn set_value(&mut self, value: f64) {
+        self.out[0] = value;
+    }
+    #[inline(always)]
+    fn set_gradient(&mut self, a: usize, g: &Vector3<f64>) {
+        for i in 0..3 {
+            self.out[1 + 3 * a + i] = self.dt * g[i];
+        }
+    }
+    #[inline(always)]
+    fn set_hessian_pair(&mut self, a: usize, b: usize, block: &Matrix3<f64>) {
+        let (w, dt2) = (self.width, self.dt * self.dt);
+        let base = 1 + 3 * w;
+        let ab = &mut self.out[base + 9 * (a * w + b)..][..9];
+        for i in 0..3 {
+            for k in 0..3 {
+                // A diagonal block is made exactly symmetric from its lower triangle.
+                ab[3 * i + k] = dt2
+                    * if a == b {
+                        block[(i.max(k), i.min(k))]
+                    } else {
+                        block[(i, k)]
+                    };
+            }
+        }
+        if a != b {
+            let ba = &mut self.out[base + 9 * (b * w + a)..][..9];
+            for i in 0..3 {
+                for k in 0..3 {
+                    ba[3 * k + i] = dt2 * block[(i, k)];
+                }
+            }
+        }
+    }
+}
+
 /// [`write_deformable_element`] for a stencil with nodes that have no DOFs: node `a` goes to
 /// block slot `slots[a]`, `None` for a node without DOFs.
 pub fn write_deformable_element_in_slots<const N: usize>(
