@@ -359,6 +359,39 @@ pub fn write_deformable_element_in_slots<const N: usize>(
     }
 }
 
+/// A node's Jacobian `∂x/∂(block)`: `s·I` (a deformable node's or a rigid body's linear block:
+/// `dt·I`) or a full matrix (a rigid point's angular block). The identity's products are skipped.
+#[derive(Clone, Copy)]
+enum Jacobian {
+    Scaled(f64),
+    Full(Matrix3<f64>),
+}
+
+impl Jacobian {
+    /// `Jᵀ m`.
+    #[inline(always)]
+    fn transpose_times<C: nalgebra::Dim, S: nalgebra::storage::Storage<f64, nalgebra::U3, C>>(
+        &self,
+        m: &nalgebra::Matrix<f64, nalgebra::U3, C, S>,
+    ) -> nalgebra::OMatrix<f64, nalgebra::U3, C>
+    where
+        nalgebra::DefaultAllocator: nalgebra::allocator::Allocator<nalgebra::U3, C>,
+    {
+        match self {
+            Jacobian::Scaled(s) => m * *s,
+            Jacobian::Full(j) => j.transpose() * m,
+        }
+    }
+    /// `m J`.
+    #[inline(always)]
+    fn right_of(&self, m: &Matrix3<f64>) -> Matrix3<f64> {
+        match self {
+            Jacobian::Scaled(s) => m * *s,
+            Jacobian::Full(j) => m * j,
+        }
+    }
+}
+
 /// Map position-space derivatives of an element (value, gradient and full Hessian of `d`) to its
 /// DOF blocks (see [`element_blocks`]), writing the solver layout of
 /// [`element_stride`](super::term::element_stride)`(width)` into `out`, with the Hessian made
@@ -375,13 +408,16 @@ pub fn map_element<const N: usize>(
     let m = element_blocks(maps, &mut blocks[..2 * N]);
     debug_assert!(m <= width);
     let slot = |b: u32| blocks[..m].iter().position(|&x| x == b).expect("block of the element");
-    // Per node: up to two (slot, Jacobian) pairs.
-    let eye = Matrix3::identity();
-    let jac: [[(usize, Matrix3<f64>); 2]; N] = std::array::from_fn(|a| match maps[a] {
-        NodeMap::Free { block } => [(slot(block), eye * dt), (usize::MAX, eye)],
-        NodeMap::Rigid { lin, ang, local, pose } => [(slot(lin), eye * dt), (slot(ang), pose.point_jacobian_w(&local))],
-        NodeMap::AngularVelocity { ang } => [(slot(ang), eye), (usize::MAX, eye)],
-        NodeMap::Fixed => [(usize::MAX, eye), (usize::MAX, eye)],
+    // Per node: up to two (slot, Jacobian) pairs; most Jacobians are multiples of the identity.
+    let none = (usize::MAX, Jacobian::Scaled(0.0));
+    let jac: [[(usize, Jacobian); 2]; N] = std::array::from_fn(|a| match maps[a] {
+        NodeMap::Free { block } => [(slot(block), Jacobian::Scaled(dt)), none],
+        NodeMap::Rigid { lin, ang, local, pose } => [
+            (slot(lin), Jacobian::Scaled(dt)),
+            (slot(ang), Jacobian::Full(pose.point_jacobian_w(&local))),
+        ],
+        NodeMap::AngularVelocity { ang } => [(slot(ang), Jacobian::Scaled(1.0)), none],
+        NodeMap::Fixed => [none, none],
     });
     let n = 3 * m;
     // At most 2 blocks per node and 4 nodes: 8 blocks, 24 DOFs.
@@ -395,7 +431,7 @@ pub fn map_element<const N: usize>(
             if s == usize::MAX {
                 continue;
             }
-            let gs = j.transpose() * ga;
+            let gs = j.transpose_times(&ga);
             for i in 0..3 {
                 g[3 * s + i] += gs[i];
             }
@@ -406,12 +442,12 @@ pub fn map_element<const N: usize>(
                 if sa == usize::MAX {
                     continue;
                 }
-                let left = ja.transpose() * hab;
+                let left = ja.transpose_times(&hab);
                 for &(sb, jb) in &jac[b] {
                     if sb == usize::MAX {
                         continue;
                     }
-                    let blk = left * jb;
+                    let blk = jb.right_of(&left);
                     for i in 0..3 {
                         for k in 0..3 {
                             h[(3 * sa + i) * n + 3 * sb + k] += blk[(i, k)];
