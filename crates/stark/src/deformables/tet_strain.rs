@@ -585,6 +585,20 @@ mod tests {
         (tets, state)
     }
 
+    /// `f(tets, e, stencil)` for every tet of `random_state` at seeds 0–7 and stretches 1 and
+    /// 1.6 (the strain limit inactive, then active).
+    fn for_each_test_tet(mut f: impl FnMut(&TetStrain, usize, &Stencil<4>)) {
+        for seed in 0..8 {
+            for stretch in [1.0, 1.6] {
+                let (tets, state) = random_state(seed, stretch);
+                let eval = state.eval();
+                for e in 0..tets.num_elements() {
+                    f(&tets, e, &Stencil::new(tets.nodes(e), &eval));
+                }
+            }
+        }
+    }
+
     /// The largest difference between `a` and `b` relative to `b`'s largest entry.
     fn rel(a: &[f64], b: &[f64]) -> f64 {
         let scale = b.iter().fold(0.0f64, |m, y| m.max(y.abs()));
@@ -611,29 +625,22 @@ mod tests {
         })
         .unwrap();
         let mut worst = 0.0f64;
-        for seed in 0..8 {
-            for stretch in [1.0, 1.6] {
-                let (tets, state) = random_state(seed, stretch);
-                let eval = state.eval();
-                for e in 0..tets.num_elements() {
-                    let stencil = Stencil::new(tets.nodes(e), &eval);
-                    let mut builtin = HyperDual::<4>::constant(0.0);
-                    assert_eq!(
-                        tets.derivatives(e, &stencil, false, &mut builtin),
-                        FastDerivatives::Exact
-                    );
-                    let (p, _) = tets.kernel_params(e, &stencil);
-                    let mut x = [0.0; 12];
-                    crate::energy::flat_from_points(&stencil.x, &mut x);
-                    let (mut g, mut h) = ([0.0; 12], [0.0; 144]);
-                    let v = kernel.evaluate(&x, &p, &mut g, &mut h);
-                    worst = worst
-                        .max(rel(&[v], &[builtin.value]))
-                        .max(rel(&g, builtin.gradient_flat()))
-                        .max(rel(&h, builtin.hess.as_flattened().as_flattened().as_flattened()));
-                }
-            }
-        }
+        for_each_test_tet(|tets, e, stencil| {
+            let mut builtin = HyperDual::<4>::constant(0.0);
+            assert_eq!(
+                tets.derivatives(e, stencil, false, &mut builtin),
+                FastDerivatives::Exact
+            );
+            let (p, _) = tets.kernel_params(e, stencil);
+            let mut x = [0.0; 12];
+            crate::energy::flat_from_points(&stencil.x, &mut x);
+            let (mut g, mut h) = ([0.0; 12], [0.0; 144]);
+            let v = kernel.evaluate(&x, &p, &mut g, &mut h);
+            worst = worst
+                .max(rel(&[v], &[builtin.value]))
+                .max(rel(&g, builtin.gradient_flat()))
+                .max(rel(&h, builtin.hess.as_flattened().as_flattened().as_flattened()));
+        });
         assert!(worst < 1e-12, "largest relative difference {worst:e}");
     }
 
@@ -679,45 +686,34 @@ mod tests {
         use crate::energy::kinematics::write_deformable_element;
         use crate::energy::term::element_stride;
         let mut written = 0;
-        for seed in 0..8 {
-            for stretch in [1.0, 1.6] {
-                let (tets, state) = random_state(seed, stretch);
-                let eval = state.eval();
-                for e in 0..tets.num_elements() {
-                    let stencil = Stencil::new(tets.nodes(e), &eval);
-                    for width in [4, 6] {
-                        let mut direct = vec![f64::NAN; element_stride(width)];
-                        let fast =
-                            tets.write_deformable(e, &stencil, false, &mut DeformableRow::new(4, eval.dt, &mut direct));
-                        // Tet 0 is damped and limited, tet 1 elastic with no limit.
-                        assert_eq!(fast, e == 1, "seed {seed} stretch {stretch} tet {e}");
-                        assert!(!tets.write_deformable(
-                            e,
-                            &stencil,
-                            true,
-                            &mut DeformableRow::new(4, eval.dt, &mut direct.clone())
-                        ));
-                        if !fast {
-                            continue;
-                        }
-                        written += 1;
-                        let mut d = HyperDual::<4>::constant(0.0);
-                        tets.derivatives(e, &stencil, false, &mut d);
-                        let mut mapped = vec![f64::NAN; element_stride(width)];
-                        write_deformable_element(&d, eval.dt, &mut mapped);
-                        // Padding slots' Hessian blocks are never read; everything else is equal.
-                        let read = 1 + 3 * width;
-                        assert_eq!(direct[..read], mapped[..read]);
-                        for a in 0..4 {
-                            for b in 0..4 {
-                                let k = read + 9 * (a * width + b);
-                                assert_eq!(direct[k..k + 9], mapped[k..k + 9], "block ({a}, {b})");
-                            }
-                        }
+        for_each_test_tet(|tets, e, stencil| {
+            for width in [4, 6] {
+                let mut direct = vec![f64::NAN; element_stride(width)];
+                let fast =
+                    tets.write_deformable(e, stencil, false, &mut DeformableRow::new(4, stencil.dt, &mut direct));
+                // Tet 0 is damped (and limited when stretched), tet 1 elastic with no limit.
+                assert_eq!(fast, e == 1, "tet {e}");
+                let mut spare = direct.clone();
+                assert!(!tets.write_deformable(e, stencil, true, &mut DeformableRow::new(4, stencil.dt, &mut spare)));
+                if !fast {
+                    continue;
+                }
+                written += 1;
+                let mut d = HyperDual::<4>::constant(0.0);
+                tets.derivatives(e, stencil, false, &mut d);
+                let mut mapped = vec![f64::NAN; element_stride(width)];
+                write_deformable_element(&d, stencil.dt, &mut mapped);
+                // Padding slots' Hessian blocks are never read; everything else is equal.
+                let read = 1 + 3 * width;
+                assert_eq!(direct[..read], mapped[..read]);
+                for a in 0..4 {
+                    for b in 0..4 {
+                        let k = read + 9 * (a * width + b);
+                        assert_eq!(direct[k..k + 9], mapped[k..k + 9], "block ({a}, {b})");
                     }
                 }
             }
-        }
+        });
         assert!(written > 0);
     }
 
