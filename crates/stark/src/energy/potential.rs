@@ -336,8 +336,9 @@ impl<P, const N: usize> PotentialTerm<P, N> {
 }
 
 impl<P: Potential<N>, const N: usize> PotentialTerm<P, N> {
-    fn all_free(&self, e: usize, state: &EvalState) -> bool {
-        state.bodies.is_empty() || self.potential.nodes(e).iter().all(|n| n.is_free(state))
+    /// Whether an element's `nodes` are all deformable (`∂x/∂v = dt·I` on their own blocks).
+    fn all_free(nodes: &[Node; N], state: &EvalState) -> bool {
+        state.bodies.is_empty() || nodes.iter().all(|n| n.is_free(state))
     }
 }
 
@@ -380,7 +381,7 @@ impl<P: Potential<N>, const N: usize> EnergyTerm for PotentialTerm<P, N> {
             (0..n)
                 .into_par_iter()
                 .map(|e| {
-                    if self.all_free(e, state) {
+                    if Self::all_free(&self.potential.nodes(e), state) {
                         N
                     } else {
                         count_blocks(&self.potential.nodes(e).map(|node| node.map(state)))
@@ -397,7 +398,7 @@ impl<P: Potential<N>, const N: usize> EnergyTerm for PotentialTerm<P, N> {
         let w = self.stencil_width(state);
         out.par_chunks_mut(w).enumerate().for_each(|(e, o)| {
             let nodes = self.potential.nodes(e);
-            if self.all_free(e, state) {
+            if Self::all_free(&nodes, state) {
                 o.iter_mut().for_each(|s| *s = NO_DOF);
                 for (slot, node) in o.iter_mut().zip(nodes) {
                     *slot = node.index() as u32;
@@ -422,7 +423,7 @@ impl<P: Potential<N>, const N: usize> EnergyTerm for PotentialTerm<P, N> {
         let n = 3 * N;
         let project = mode == EvalMode::ProjectedHessian && !self.potential.is_convex();
         let stencil = Stencil::new(self.potential.nodes(e), state);
-        let all_free = self.all_free(e, state);
+        let all_free = Self::all_free(&stencil.nodes, state);
         if all_free
             && self
                 .potential
