@@ -13,6 +13,10 @@
 //! the elements), and the coarse matrix is the Galerkin product `Pᵀ A P`, recursively until a
 //! dense Cholesky takes the last few hundred unknowns. One V-cycle with Chebyshev smoothing (a
 //! fixed polynomial in `D⁻¹A`: symmetric, parallel, no ordering) is the preconditioner.
+//! The cycle reads its matrices (each level's, the prolongators, the smoothers' inverted
+//! diagonal blocks) rounded to single precision: its passes over them are memory-bound, and a
+//! cycle over rounded matrices is still a fixed symmetric operator (a hanging 128² cloth: the
+//! same CG iterations, the linear solve −23%).
 //!
 //! Where it stands (BENCHMARKS.md, "Algebraic multigrid"): CG's iteration count stays nearly flat
 //! under refinement (a membrane-like grid: 13–14 from 16² to 128²; the hanging cloths with the
@@ -87,27 +91,118 @@ fn apply(b: &Block, x: &[f64]) -> [f64; 3] {
     ]
 }
 
-/// `r −= A x`, one pass over the rows.
-fn subtract_product(a: &BlockSparseMatrix, x: &[f64], r: &mut [f64]) {
+/// A 3×3 block, row-major, in single precision.
+type Block32 = [f32; 9];
+
+/// The blocks rounded to single precision. The V-cycle's passes over its matrices are
+/// memory-bound, and its operator only has to stay fixed, linear and symmetric, which the cycle
+/// over the rounded matrices is (a block and its transpose round alike); CG's own product keeps
+/// the full matrix.
+fn single(values: &[Block]) -> Vec<Block32> {
+    let mut out = vec![[0.0f32; 9]; values.len()];
+    out.par_chunks_mut(4096)
+        .zip(values.par_chunks(4096))
+        .for_each(|(out, values)| {
+            for (o, v) in out.as_flattened_mut().iter_mut().zip(values.as_flattened()) {
+                *o = *v as f32;
+            }
+        });
+    out
+}
+
+#[inline]
+fn apply32(b: &Block32, x: &[f64]) -> [f64; 3] {
+    let b = b.map(f64::from);
+    apply(&b, x)
+}
+
+/// `Σ_k M_k x_{c_k}` over the blocks `values` with columns `cols` (a block row of a level
+/// matrix or of the prolongator), the blocks in single precision.
+#[inline(always)]
+fn row_times32(cols: &[u32], values: &[Block32], x: &[f64]) -> [f64; 3] {
+    #[cfg(all(target_arch = "x86_64", target_feature = "avx2", target_feature = "fma"))]
+    {
+        // SAFETY: the target has AVX2 and FMA (compile-time features); every load reads inside
+        // its block or its 3-vector of `x` (masked loads for the block's last row and for `x`),
+        // and each column is checked against `x` before the read.
+        unsafe {
+            use std::arch::x86_64::*;
+            let first3 = _mm256_set_epi64x(0, -1, -1, -1);
+            let first3_ps = _mm_set_epi32(0, -1, -1, -1);
+            let (mut p0, mut p1, mut p2) = (_mm256_setzero_pd(), _mm256_setzero_pd(), _mm256_setzero_pd());
+            for (&c, b) in cols.iter().zip(values) {
+                let c = c as usize;
+                assert!(3 * c + 3 <= x.len(), "block column {c} beyond the vector");
+                let xc = _mm256_maskload_pd(x.as_ptr().add(3 * c), first3);
+                let bp = b.as_ptr();
+                // Lane 3 of the first two rows holds the next row's first entry, times x's zero.
+                p0 = _mm256_fmadd_pd(_mm256_cvtps_pd(_mm_loadu_ps(bp)), xc, p0);
+                p1 = _mm256_fmadd_pd(_mm256_cvtps_pd(_mm_loadu_ps(bp.add(3))), xc, p1);
+                p2 = _mm256_fmadd_pd(_mm256_cvtps_pd(_mm_maskload_ps(bp.add(6), first3_ps)), xc, p2);
+            }
+            let mut lanes = [[0.0; 4]; 3];
+            _mm256_storeu_pd(lanes[0].as_mut_ptr(), p0);
+            _mm256_storeu_pd(lanes[1].as_mut_ptr(), p1);
+            _mm256_storeu_pd(lanes[2].as_mut_ptr(), p2);
+            lanes.map(|l| l[0] + l[1] + l[2])
+        }
+    }
+    #[cfg(not(all(target_arch = "x86_64", target_feature = "avx2", target_feature = "fma")))]
+    {
+        let mut acc = [0.0; 3];
+        for (&c, b) in cols.iter().zip(values) {
+            let c = c as usize;
+            let p = apply32(b, &x[3 * c..3 * c + 3]);
+            acc[0] += p[0];
+            acc[1] += p[1];
+            acc[2] += p[2];
+        }
+        acc
+    }
+}
+
+/// A square level matrix as the cycle reads it: its pattern, and its blocks in single precision.
+#[derive(Clone, Copy)]
+struct CycleMatrix<'a> {
+    row_start: &'a [usize],
+    cols: &'a [u32],
+    values: &'a [Block32],
+}
+
+impl<'a> CycleMatrix<'a> {
+    fn new(a: &'a BlockSparseMatrix, values: &'a [Block32]) -> Self {
+        assert_eq!(
+            values.len(),
+            a.values.len(),
+            "single-precision blocks of another pattern"
+        );
+        Self {
+            row_start: &a.row_start,
+            cols: &a.cols,
+            values,
+        }
+    }
+}
+
+/// `r −= A x`, one pass over the rows of the rounded matrix.
+fn subtract_product32(a: CycleMatrix, x: &[f64], r: &mut [f64]) {
     r.par_chunks_mut(3 * ROWS_PER_TASK).enumerate().for_each(|(chunk, rs)| {
         let first = chunk * ROWS_PER_TASK;
         for (k, rr) in rs.chunks_exact_mut(3).enumerate() {
             let row = first + k;
-            for idx in a.row_start[row]..a.row_start[row + 1] {
-                let c = a.cols[idx] as usize;
-                let p = apply(&a.values[idx], &x[3 * c..3 * c + 3]);
-                rr[0] -= p[0];
-                rr[1] -= p[1];
-                rr[2] -= p[2];
-            }
+            let span = a.row_start[row]..a.row_start[row + 1];
+            let acc = row_times32(&a.cols[span.clone()], &a.values[span], x);
+            rr[0] -= acc[0];
+            rr[1] -= acc[1];
+            rr[2] -= acc[2];
         }
     });
 }
 
-/// `r = b − A x`.
-fn residual_into(a: &BlockSparseMatrix, x: &[f64], b: &[f64], r: &mut [f64]) {
+/// `r = b − A x` over the rounded matrix.
+fn residual_into32(a: CycleMatrix, x: &[f64], b: &[f64], r: &mut [f64]) {
     r.copy_from_slice(b);
-    subtract_product(a, x, r);
+    subtract_product32(a, x, r);
 }
 
 /// A rectangular matrix of 3×3 blocks, rows compressed (the prolongator and its transpose).
@@ -171,6 +266,7 @@ impl BlockRows {
     }
 
     /// `y = M x`.
+    #[cfg(test)]
     fn mul_vec(&self, x: &[f64], y: &mut [f64]) {
         y.par_chunks_mut(3 * ROWS_PER_TASK).enumerate().for_each(|(chunk, ys)| {
             for (k, yr) in ys.chunks_exact_mut(3).enumerate() {
@@ -182,6 +278,22 @@ impl BlockRows {
                     acc[2] += p[2];
                 }
                 yr.copy_from_slice(&acc);
+            }
+        });
+    }
+
+    /// `y = M x` with `values`, this matrix's blocks in single precision.
+    fn mul_vec32(&self, values: &[Block32], x: &[f64], y: &mut [f64]) {
+        assert_eq!(
+            values.len(),
+            self.values.len(),
+            "single-precision blocks of another matrix"
+        );
+        y.par_chunks_mut(3 * ROWS_PER_TASK).enumerate().for_each(|(chunk, ys)| {
+            for (k, yr) in ys.chunks_exact_mut(3).enumerate() {
+                let r = chunk * ROWS_PER_TASK + k;
+                let span = self.row_start[r]..self.row_start[r + 1];
+                yr.copy_from_slice(&row_times32(&self.cols[span.clone()], &values[span], x));
             }
         });
     }
@@ -494,13 +606,28 @@ struct Level {
     /// Prolongator from this coarse level to the one above, and its transpose (restriction).
     prolongator: BlockRows,
     restriction: BlockRows,
+    /// The blocks of the three in single precision, which the cycle reads.
+    matrix32: Vec<Block32>,
+    prolongator32: Vec<Block32>,
+    restriction32: Vec<Block32>,
 }
 
 /// The smoother's data on one level (finest included).
 struct Smoother {
-    inv_diag: Vec<Block>,
+    /// The inverses of the matrix's diagonal blocks, in single precision.
+    inv_diag32: Vec<Block32>,
     lambda_max: f64,
     degree: usize,
+}
+
+impl Smoother {
+    fn new(inv_diag: &[Block], lambda_max: f64) -> Self {
+        Self {
+            inv_diag32: single(inv_diag),
+            lambda_max,
+            degree: CHEBYSHEV_DEGREE,
+        }
+    }
 }
 
 enum CoarsestSolve {
@@ -540,6 +667,9 @@ pub struct Amg {
     work: Vec<Work>,
     /// The finest level's last power iterate (its top eigenvector, nearly).
     top: Vec<f64>,
+    /// The blocks of the finest matrix (the one last built from or refitted to) in single
+    /// precision.
+    finest32: Vec<Block32>,
 }
 
 /// Statistics of a hierarchy (logs and tests).
@@ -582,11 +712,7 @@ impl Amg {
                 (n_agg > 0 && ((n_agg * space.columns / 3) as f64) < 0.85 * fine.n_blocks as f64)
                     .then(|| coarsen(fine, lambda_max, &space, &agg, n_agg, &strong))
             };
-            smoothers.push(Smoother {
-                inv_diag,
-                lambda_max,
-                degree: CHEBYSHEV_DEGREE,
-            });
+            smoothers.push(Smoother::new(&inv_diag, lambda_max));
             match next {
                 Some((level, coarse_space)) => {
                     levels.push(level);
@@ -606,6 +732,7 @@ impl Amg {
             coarsest,
             work,
             top,
+            finest32: single(&a.values),
         }
     }
 
@@ -623,11 +750,8 @@ impl Amg {
         if lambda_max <= 0.0 || !lambda_max.is_finite() {
             lambda_max = SPECTRAL_SAFETY * spectral_radius(a, &inv_diag);
         }
-        self.smoothers[0] = Smoother {
-            inv_diag,
-            lambda_max,
-            degree: CHEBYSHEV_DEGREE,
-        };
+        self.smoothers[0] = Smoother::new(&inv_diag, lambda_max);
+        self.finest32 = single(&a.values);
     }
 
     /// Blocks and stored blocks per level.
@@ -644,20 +768,15 @@ impl Amg {
     /// `z ≈ A⁻¹ r`: one V-cycle from zero. `a` is the matrix the hierarchy was built from.
     pub fn precondition(&mut self, a: &BlockSparseMatrix, r: &[f64], z: &mut [f64]) {
         self.work[0].b.copy_from_slice(r);
-        cycle(&self.levels, &self.smoothers, &self.coarsest, &mut self.work, a);
+        let finest = CycleMatrix::new(a, &self.finest32);
+        cycle(&self.levels, &self.smoothers, &self.coarsest, &mut self.work, finest);
         z.copy_from_slice(&self.work[0].x);
     }
 }
 
 /// V-cycle for the right-hand side in `work[0].b` of `matrix` (the level above `levels[0]`),
 /// into `work[0].x`.
-fn cycle(
-    levels: &[Level],
-    smoothers: &[Smoother],
-    coarsest: &CoarsestSolve,
-    work: &mut [Work],
-    matrix: &BlockSparseMatrix,
-) {
+fn cycle(levels: &[Level], smoothers: &[Smoother], coarsest: &CoarsestSolve, work: &mut [Work], matrix: CycleMatrix) {
     let Some((level, coarser)) = levels.split_first() else {
         solve_coarsest(coarsest, &work[0].b, &mut work[0].x);
         return;
@@ -666,10 +785,11 @@ fn cycle(
     let Work { b, x, r, d, t } = here;
     chebyshev(matrix, &smoothers[0], b, x, r, d, true);
     // The residual after pre-smoothing, restricted; the coarse correction, prolongated.
-    residual_into(matrix, x, b, r);
-    level.restriction.mul_vec(r, &mut below[0].b);
-    cycle(coarser, &smoothers[1..], coarsest, below, &level.matrix);
-    level.prolongator.mul_vec(&below[0].x, t);
+    residual_into32(matrix, x, b, r);
+    level.restriction.mul_vec32(&level.restriction32, r, &mut below[0].b);
+    let coarse = CycleMatrix::new(&level.matrix, &level.matrix32);
+    cycle(coarser, &smoothers[1..], coarsest, below, coarse);
+    level.prolongator.mul_vec32(&level.prolongator32, &below[0].x, t);
     x.par_iter_mut().zip(t.par_iter()).for_each(|(x, t)| *x += t);
     chebyshev(matrix, &smoothers[0], b, x, r, d, false);
 }
@@ -832,6 +952,9 @@ fn coarsen(
     };
     (
         Level {
+            matrix32: single(&matrix.values),
+            prolongator32: single(&prolongator.values),
+            restriction32: single(&restriction.values),
             matrix,
             prolongator,
             restriction,
@@ -875,7 +998,7 @@ fn solve_coarsest(solve: &CoarsestSolve, b: &[f64], x: &mut [f64]) {
 /// `1/θ`). `x_is_zero`: start from zero (`x` is
 /// overwritten), otherwise from `x`.
 fn chebyshev(
-    a: &BlockSparseMatrix,
+    a: CycleMatrix,
     smoother: &Smoother,
     b: &[f64],
     x: &mut [f64],
@@ -895,7 +1018,7 @@ fn chebyshev(
     let delta = 0.5 * (upper - lower);
     let sigma = theta / delta;
     let mut rho = 1.0 / sigma;
-    let inv = &smoother.inv_diag;
+    let inv = &smoother.inv_diag32;
     // d = D⁻¹ r / θ, x += d (r = b from zero).
     if x_is_zero {
         step_direction(x, d, b, inv, Direction::First { theta }, true);
@@ -903,12 +1026,12 @@ fn chebyshev(
             r.copy_from_slice(b);
         }
     } else {
-        residual_into(a, x, b, r);
+        residual_into32(a, x, b, r);
         step_direction(x, d, r, inv, Direction::First { theta }, false);
     }
     for _ in 1..smoother.degree {
         // r −= A d (r = b − A x), then the next direction.
-        subtract_product(a, d, r);
+        subtract_product32(a, d, r);
         let rho_next = 1.0 / (2.0 * sigma - rho);
         let keep = rho_next * rho;
         let push = 2.0 * rho_next / delta;
@@ -926,7 +1049,7 @@ enum Direction {
 
 /// Chebyshev's direction into `d`, then `x ← x + d` (`x ← d` when `x_from_zero`). One pass over
 /// the vectors.
-fn step_direction(x: &mut [f64], d: &mut [f64], r: &[f64], inv: &[Block], direction: Direction, x_from_zero: bool) {
+fn step_direction(x: &mut [f64], d: &mut [f64], r: &[f64], inv: &[Block32], direction: Direction, x_from_zero: bool) {
     let rows = 3 * ROWS_PER_TASK;
     x.par_chunks_mut(rows)
         .zip(d.par_chunks_mut(rows))
@@ -939,7 +1062,7 @@ fn step_direction(x: &mut [f64], d: &mut [f64], r: &[f64], inv: &[Block], direct
                 .zip(rs.chunks_exact(3))
                 .zip(ms)
             {
-                let z = apply(m, r);
+                let z = apply32(m, r);
                 for i in 0..3 {
                     d[i] = match direction {
                         Direction::First { theta } => z[i] / theta,
