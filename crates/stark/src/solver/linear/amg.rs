@@ -378,6 +378,20 @@ where
     F: Fn(usize) -> I + Sync,
     I: Iterator<Item = (usize, &'a Block)>,
 {
+    product_from(n_rows, right, left_row, |_| 0)
+}
+
+/// The blocks of `L R` in columns `first_column(r)..` of each row `r` (see [`product`]).
+fn product_from<'a, F, I>(
+    n_rows: usize,
+    right: &BlockRows,
+    left_row: F,
+    first_column: impl Fn(usize) -> usize + Sync,
+) -> BlockRows
+where
+    F: Fn(usize) -> I + Sync,
+    I: Iterator<Item = (usize, &'a Block)>,
+{
     let n_cols = right.n_cols;
     BlockRows::from_rows(n_rows, n_cols, |r, out| {
         thread_local! {
@@ -389,9 +403,12 @@ where
                 *acc = Some(RowAccumulator::new(n_cols));
             }
             let acc = acc.as_mut().expect("accumulator present");
+            let first = first_column(r);
             for (k, l) in left_row(r) {
                 for (c, rb) in right.row(k) {
-                    acc.add(c, 1.0, &mul(l, rb));
+                    if c >= first {
+                        acc.add(c, 1.0, &mul(l, rb));
+                    }
                 }
             }
             acc.drain_into(out);
@@ -909,7 +926,14 @@ fn coarsen(
     let ap = product(a.n_blocks, &prolongator, |r| {
         (a.row_start[r]..a.row_start[r + 1]).map(|idx| (a.cols[idx] as usize, &a.values[idx]))
     });
-    let coarse = product(n_coarse, &ap, |r| restriction.row(r));
+    // Its upper block triangle, and the lower one as the upper's transpose (exactly symmetric,
+    // half the products).
+    let upper = product_from(n_coarse, &ap, |r| restriction.row(r), |r| r);
+    let lower = upper.transposed();
+    let coarse = BlockRows::from_rows(n_coarse, n_coarse, |r, out| {
+        out.extend(lower.row(r).filter(|&(c, _)| c < r).map(|(c, b)| (c as u32, *b)));
+        out.extend(upper.row(r).map(|(c, b)| (c as u32, *b)));
+    });
     let mut matrix = BlockSparseMatrix {
         n_blocks: n_coarse,
         diagonal: Vec::with_capacity(n_coarse),
