@@ -1045,21 +1045,22 @@ fn chebyshev(
     let inv = &smoother.inv_diag32;
     // d = D⁻¹ r / θ, x += d (r = b from zero).
     if x_is_zero {
-        step_direction(x, d, b, inv, Direction::First { theta }, true);
+        step_direction(x, d, b, inv, Direction::First { theta }, true, smoother.degree > 1);
         if smoother.degree > 1 {
             r.copy_from_slice(b);
         }
     } else {
         residual_into32(a, x, b, r);
-        step_direction(x, d, r, inv, Direction::First { theta }, false);
+        step_direction(x, d, r, inv, Direction::First { theta }, false, smoother.degree > 1);
     }
-    for _ in 1..smoother.degree {
+    for k in 1..smoother.degree {
         // r −= A d (r = b − A x), then the next direction.
         subtract_product32(a, d, r);
         let rho_next = 1.0 / (2.0 * sigma - rho);
         let keep = rho_next * rho;
         let push = 2.0 * rho_next / delta;
-        step_direction(x, d, r, inv, Direction::Next { keep, push }, false);
+        let more = smoother.degree > k + 1;
+        step_direction(x, d, r, inv, Direction::Next { keep, push }, false, more);
         rho = rho_next;
     }
 }
@@ -1071,9 +1072,17 @@ enum Direction {
     Next { keep: f64, push: f64 },
 }
 
-/// Chebyshev's direction into `d`, then `x ← x + d` (`x ← d` when `x_from_zero`). One pass over
-/// the vectors.
-fn step_direction(x: &mut [f64], d: &mut [f64], r: &[f64], inv: &[Block32], direction: Direction, x_from_zero: bool) {
+/// Chebyshev's direction `d`, then `x ← x + d` (`x ← d` when `x_from_zero`); `d` is stored only
+/// when a later direction needs it (`store_direction`). One pass over the vectors.
+fn step_direction(
+    x: &mut [f64],
+    d: &mut [f64],
+    r: &[f64],
+    inv: &[Block32],
+    direction: Direction,
+    x_from_zero: bool,
+    store_direction: bool,
+) {
     let rows = 3 * ROWS_PER_TASK;
     x.par_chunks_mut(rows)
         .zip(d.par_chunks_mut(rows))
@@ -1088,11 +1097,14 @@ fn step_direction(x: &mut [f64], d: &mut [f64], r: &[f64], inv: &[Block32], dire
             {
                 let z = apply32(m, r);
                 for i in 0..3 {
-                    d[i] = match direction {
+                    let di = match direction {
                         Direction::First { theta } => z[i] / theta,
                         Direction::Next { keep, push } => keep * d[i] + push * z[i],
                     };
-                    x[i] = if x_from_zero { d[i] } else { x[i] + d[i] };
+                    if store_direction {
+                        d[i] = di;
+                    }
+                    x[i] = if x_from_zero { di } else { x[i] + di };
                 }
             }
         });
