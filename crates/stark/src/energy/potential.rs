@@ -381,10 +381,11 @@ impl<P: Potential<N>, const N: usize> EnergyTerm for PotentialTerm<P, N> {
             (0..n)
                 .into_par_iter()
                 .map(|e| {
-                    if Self::all_free(&self.potential.nodes(e), state) {
+                    let nodes = self.potential.nodes(e);
+                    if Self::all_free(&nodes, state) {
                         N
                     } else {
-                        count_blocks(&self.potential.nodes(e).map(|node| node.map(state)))
+                        count_blocks(&nodes.map(|node| node.map(state)))
                     }
                 })
                 .max()

@@ -99,7 +99,15 @@ type Block32 = [f32; 9];
 /// over the rounded matrices is (a block and its transpose round alike); CG's own product keeps
 /// the full matrix.
 fn single(values: &[Block]) -> Vec<Block32> {
-    let mut out = vec![[0.0f32; 9]; values.len()];
+    let mut out = Vec::new();
+    single_into(values, &mut out);
+    out
+}
+
+/// [`single`] into `out`, reusing its allocation (the finest level's copy is renewed at every
+/// Newton iteration).
+fn single_into(values: &[Block], out: &mut Vec<Block32>) {
+    out.resize(values.len(), [0.0; 9]);
     out.par_chunks_mut(4096)
         .zip(values.par_chunks(4096))
         .for_each(|(out, values)| {
@@ -107,7 +115,6 @@ fn single(values: &[Block]) -> Vec<Block32> {
                 *o = *v as f32;
             }
         });
-    out
 }
 
 #[inline]
@@ -161,7 +168,8 @@ fn row_times32(cols: &[u32], values: &[Block32], x: &[f64]) -> [f64; 3] {
     }
 }
 
-/// A square level matrix as the cycle reads it: its pattern, and its blocks in single precision.
+/// A matrix of 3×3 block rows as the cycle reads it (a level's matrix, a prolongator or a
+/// restriction): its pattern, and its blocks in single precision.
 #[derive(Clone, Copy)]
 struct CycleMatrix<'a> {
     row_start: &'a [usize],
@@ -182,33 +190,46 @@ impl<'a> CycleMatrix<'a> {
             values,
         }
     }
+
+    /// The rectangular `m` with `values`, its blocks in single precision.
+    fn of_rows(m: &'a BlockRows, values: &'a [Block32]) -> Self {
+        assert_eq!(
+            values.len(),
+            m.values.len(),
+            "single-precision blocks of another matrix"
+        );
+        Self {
+            row_start: &m.row_start,
+            cols: &m.cols,
+            values,
+        }
+    }
+
+    /// `combine(y_r, (A x)_r)` for every block row `r` of `y`, one pass over the rows (in
+    /// parallel over fixed chunks of rows).
+    fn each_row_product(self, x: &[f64], y: &mut [f64], combine: impl Fn(&mut [f64], [f64; 3]) + Sync) {
+        y.par_chunks_mut(3 * ROWS_PER_TASK).enumerate().for_each(|(chunk, ys)| {
+            let first = chunk * ROWS_PER_TASK;
+            for (k, yr) in ys.chunks_exact_mut(3).enumerate() {
+                let span = self.row_start[first + k]..self.row_start[first + k + 1];
+                combine(yr, row_times32(&self.cols[span.clone()], &self.values[span], x));
+            }
+        });
+    }
 }
 
-/// `r −= A x`, one pass over the rows of the rounded matrix.
+/// `r −= A x` over the rounded matrix.
 fn subtract_product32(a: CycleMatrix, x: &[f64], r: &mut [f64]) {
-    r.par_chunks_mut(3 * ROWS_PER_TASK).enumerate().for_each(|(chunk, rs)| {
-        let first = chunk * ROWS_PER_TASK;
-        for (k, rr) in rs.chunks_exact_mut(3).enumerate() {
-            let row = first + k;
-            let span = a.row_start[row]..a.row_start[row + 1];
-            let acc = row_times32(&a.cols[span.clone()], &a.values[span], x);
-            rr[0] -= acc[0];
-            rr[1] -= acc[1];
-            rr[2] -= acc[2];
+    a.each_row_product(x, r, |rr, p| {
+        for i in 0..3 {
+            rr[i] -= p[i];
         }
     });
 }
 
 /// `y = A x` over the rounded matrix.
 fn product32(a: CycleMatrix, x: &[f64], y: &mut [f64]) {
-    y.par_chunks_mut(3 * ROWS_PER_TASK).enumerate().for_each(|(chunk, ys)| {
-        let first = chunk * ROWS_PER_TASK;
-        for (k, yr) in ys.chunks_exact_mut(3).enumerate() {
-            let row = first + k;
-            let span = a.row_start[row]..a.row_start[row + 1];
-            yr.copy_from_slice(&row_times32(&a.cols[span.clone()], &a.values[span], x));
-        }
-    });
+    a.each_row_product(x, y, |yr, p| yr.copy_from_slice(&p));
 }
 
 /// `r = b − A x` over the rounded matrix.
@@ -296,18 +317,7 @@ impl BlockRows {
 
     /// `y = M x` with `values`, this matrix's blocks in single precision.
     fn mul_vec32(&self, values: &[Block32], x: &[f64], y: &mut [f64]) {
-        assert_eq!(
-            values.len(),
-            self.values.len(),
-            "single-precision blocks of another matrix"
-        );
-        y.par_chunks_mut(3 * ROWS_PER_TASK).enumerate().for_each(|(chunk, ys)| {
-            for (k, yr) in ys.chunks_exact_mut(3).enumerate() {
-                let r = chunk * ROWS_PER_TASK + k;
-                let span = self.row_start[r]..self.row_start[r + 1];
-                yr.copy_from_slice(&row_times32(&self.cols[span.clone()], &values[span], x));
-            }
-        });
+        product32(CycleMatrix::of_rows(self, values), x, y);
     }
 
     /// `Mᵀ`.
@@ -779,13 +789,15 @@ impl Amg {
     /// the same unknowns; the power iteration continues from the last one's top eigenvector).
     pub fn refresh_finest(&mut self, a: &BlockSparseMatrix) {
         let inv_diag = block_jacobi(a);
-        self.finest32 = single(&a.values);
+        single_into(&a.values, &mut self.finest32);
         let a32 = CycleMatrix::new(a, &self.finest32);
         let mut lambda_max = SPECTRAL_SAFETY * power_iteration(a32, &inv_diag, &mut self.top, REFRESH_POWER_ITERATIONS);
         if lambda_max <= 0.0 || !lambda_max.is_finite() {
             lambda_max = SPECTRAL_SAFETY * spectral_radius(a32, &inv_diag);
         }
-        self.smoothers[0] = Smoother::new(&inv_diag, lambda_max);
+        let finest = &mut self.smoothers[0];
+        single_into(&inv_diag, &mut finest.inv_diag32);
+        finest.lambda_max = lambda_max;
     }
 
     /// Blocks and stored blocks per level.
