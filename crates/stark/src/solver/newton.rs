@@ -8,7 +8,7 @@
 //! (`StepProblem::guess_scale`).
 
 use super::linear::amg::{Amg, BlockMotion, NearNullSpace};
-use super::linear::block_sparse::{dot, norm_inf, BlockSparseMatrix};
+use super::linear::block_sparse::{dot, norm_inf, Block, BlockSparseMatrix, UpperScratch, UpperTriangle};
 use super::linear::cholesky::CholeskySolver;
 use super::linear::pcg;
 use super::settings::{LinearSolver, NewtonSettings, Projection};
@@ -145,6 +145,9 @@ pub struct NewtonWorkspace {
     /// The step's multigrid hierarchy (`LinearSolver::Amg`), built at its first solve, and the
     /// CG iterations it needed then.
     amg: Option<(Amg, usize)>,
+    /// The Hessian's upper block triangle for multigrid CG's products (half the bytes of the
+    /// whole matrix: they are memory-bound on the meshes multigrid is for).
+    upper: (UpperTriangle<Block>, UpperScratch),
     gradient: Vec<f64>,
     rhs: Vec<f64>,
     step: Vec<f64>,
@@ -388,6 +391,7 @@ struct AmgSolve {
 #[allow(clippy::too_many_arguments)]
 fn amg_solve(
     kept: &mut Option<(Amg, usize)>,
+    upper: &mut (UpperTriangle<Block>, UpperScratch),
     matrix: &BlockSparseMatrix,
     rhs: &[f64],
     step: &mut [f64],
@@ -399,6 +403,8 @@ fn amg_solve(
 ) -> AmgSolve {
     let mut fresh = new_step || kept.as_ref().is_none_or(|(amg, _)| !amg.fits(matrix));
     let mut retried_cg = 0;
+    let (upper, scratch) = upper;
+    upper.refill(matrix);
     loop {
         let t_build = Instant::now();
         if fresh {
@@ -415,9 +421,14 @@ fn amg_solve(
         } else {
             settings.cg_max_iterations.min((2 * *fresh_cg).max(AMG_KEPT_MIN_CG))
         };
-        let cg = pcg::solve_preconditioned(matrix, rhs, step, tol, max_cg, &mut |r, z| {
-            amg.precondition(matrix, r, z)
-        });
+        let cg = pcg::solve_with_product(
+            &mut |p, ap| upper.product_dot(p, ap, scratch),
+            rhs,
+            step,
+            tol,
+            max_cg,
+            &mut |r, z| amg.precondition(matrix, r, z),
+        );
         if fresh {
             *fresh_cg = cg.iterations;
         }
@@ -696,6 +707,7 @@ pub fn solve(
                     let motions = || rigid_motions_of_unknowns(&dofs, problem.nodes.len(), &ws.x, &ws.poses);
                     let info = amg_solve(
                         &mut ws.amg,
+                        &mut ws.upper,
                         matrix,
                         &ws.rhs,
                         &mut ws.step,

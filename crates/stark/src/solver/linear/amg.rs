@@ -28,7 +28,7 @@
 //! they join aggregates where the coupling is strong, and are left to the smoother where it is
 //! weak), deterministic and independent of the thread count (rows are computed independently).
 
-use super::block_sparse::{dot, Block, BlockSparseMatrix, ROWS_PER_TASK};
+use super::block_sparse::{dot, Block, BlockSparseMatrix, UpperScratch, UpperTriangle, ROWS_PER_TASK};
 use super::pcg::block_jacobi;
 use nalgebra::DMatrix;
 use rayon::prelude::*;
@@ -168,7 +168,7 @@ fn row_times32(cols: &[u32], values: &[Block32], x: &[f64]) -> [f64; 3] {
     }
 }
 
-/// A matrix of 3×3 block rows as the cycle reads it (a level's matrix, a prolongator or a
+/// A rectangular matrix of 3×3 block rows as the cycle reads it (a prolongator or a
 /// restriction): its pattern, and its blocks in single precision.
 #[derive(Clone, Copy)]
 struct CycleMatrix<'a> {
@@ -178,19 +178,6 @@ struct CycleMatrix<'a> {
 }
 
 impl<'a> CycleMatrix<'a> {
-    fn new(a: &'a BlockSparseMatrix, values: &'a [Block32]) -> Self {
-        assert_eq!(
-            values.len(),
-            a.values.len(),
-            "single-precision blocks of another pattern"
-        );
-        Self {
-            row_start: &a.row_start,
-            cols: &a.cols,
-            values,
-        }
-    }
-
     /// The rectangular `m` with `values`, its blocks in single precision.
     fn of_rows(m: &'a BlockRows, values: &'a [Block32]) -> Self {
         assert_eq!(
@@ -218,24 +205,22 @@ impl<'a> CycleMatrix<'a> {
     }
 }
 
+/// A level's matrix as the cycle reads it: its upper block triangle in single precision.
+type LevelMatrix32 = UpperTriangle<Block32>;
+
 /// `r −= A x` over the rounded matrix.
-fn subtract_product32(a: CycleMatrix, x: &[f64], r: &mut [f64]) {
-    a.each_row_product(x, r, |rr, p| {
+fn subtract_product32(a: &LevelMatrix32, x: &[f64], r: &mut [f64], scratch: &mut UpperScratch) {
+    a.product_with(x, r, scratch, |rr, p| {
         for i in 0..3 {
             rr[i] -= p[i];
         }
     });
 }
 
-/// `y = A x` over the rounded matrix.
-fn product32(a: CycleMatrix, x: &[f64], y: &mut [f64]) {
-    a.each_row_product(x, y, |yr, p| yr.copy_from_slice(&p));
-}
-
 /// `r = b − A x` over the rounded matrix.
-fn residual_into32(a: CycleMatrix, x: &[f64], b: &[f64], r: &mut [f64]) {
+fn residual_into32(a: &LevelMatrix32, x: &[f64], b: &[f64], r: &mut [f64], scratch: &mut UpperScratch) {
     r.copy_from_slice(b);
-    subtract_product32(a, x, r);
+    subtract_product32(a, x, r, scratch);
 }
 
 /// A rectangular matrix of 3×3 blocks, rows compressed (the prolongator and its transpose).
@@ -317,7 +302,7 @@ impl BlockRows {
 
     /// `y = M x` with `values`, this matrix's blocks in single precision.
     fn mul_vec32(&self, values: &[Block32], x: &[f64], y: &mut [f64]) {
-        product32(CycleMatrix::of_rows(self, values), x, y);
+        CycleMatrix::of_rows(self, values).each_row_product(x, y, |yr, p| yr.copy_from_slice(&p));
     }
 
     /// `Mᵀ`.
@@ -441,7 +426,7 @@ where
 /// `λ_max(D⁻¹A)` from below, by power iteration from a fixed start (the Rayleigh quotient of the
 /// symmetric `D^{-½} A D^{-½}`, in `A`'s inner product), on `A` rounded to single precision (the
 /// cycle's matrix, and half the bytes per pass).
-fn spectral_radius(a: CycleMatrix, inv_diag: &[Block]) -> f64 {
+fn spectral_radius(a: &LevelMatrix32, inv_diag: &[Block]) -> f64 {
     power_iteration(a, inv_diag, &mut start_vector(inv_diag.len() * 3), POWER_ITERATIONS)
 }
 
@@ -457,14 +442,15 @@ fn start_vector(n: usize) -> Vec<f64> {
 
 /// `iterations` power iterations on `D⁻¹A` from `x` (left at the last iterate); the last
 /// Rayleigh quotient.
-fn power_iteration(a: CycleMatrix, inv_diag: &[Block], x: &mut [f64], iterations: usize) -> f64 {
+fn power_iteration(a: &LevelMatrix32, inv_diag: &[Block], x: &mut [f64], iterations: usize) -> f64 {
     let n = x.len();
     let mut ax = vec![0.0; n];
+    let mut scratch = UpperScratch::default();
     let mut y = vec![0.0; n];
     let mut lambda = 0.0;
     for _ in 0..iterations {
         // The estimate only sets the smoother's interval: the rounded matrix serves.
-        product32(a, x, &mut ax);
+        a.product(x, &mut ax, &mut scratch);
         let xax = dot(x, &ax);
         // y = D⁻¹ A x
         y.par_chunks_mut(3)
@@ -647,8 +633,8 @@ struct Level {
     /// Prolongator from this coarse level to the one above, and its transpose (restriction).
     prolongator: BlockRows,
     restriction: BlockRows,
-    /// The blocks of the three in single precision, which the cycle reads.
-    matrix32: Vec<Block32>,
+    /// The three in single precision, which the cycle reads (the matrix's upper block triangle).
+    matrix32: LevelMatrix32,
     prolongator32: Vec<Block32>,
     restriction32: Vec<Block32>,
 }
@@ -686,6 +672,8 @@ struct Work {
     r: Vec<f64>,
     d: Vec<f64>,
     t: Vec<f64>,
+    /// The symmetric products' scratch.
+    scratch: UpperScratch,
 }
 
 impl Work {
@@ -696,6 +684,7 @@ impl Work {
             r: vec![0.0; n],
             d: vec![0.0; n],
             t: vec![0.0; n],
+            scratch: UpperScratch::default(),
         }
     }
 }
@@ -708,9 +697,8 @@ pub struct Amg {
     work: Vec<Work>,
     /// The finest level's last power iterate (its top eigenvector, nearly).
     top: Vec<f64>,
-    /// The blocks of the finest matrix (the one last built from or refitted to) in single
-    /// precision.
-    finest32: Vec<Block32>,
+    /// The finest matrix (the one last built from or refitted to) as the cycle reads it.
+    finest32: LevelMatrix32,
 }
 
 /// Statistics of a hierarchy (logs and tests).
@@ -735,10 +723,10 @@ impl Amg {
         let mut levels: Vec<Level> = Vec::new();
         let mut smoothers = Vec::new();
         let mut top = Vec::new();
-        let finest32 = single(&a.values);
+        let finest32 = LevelMatrix32::of(a);
         loop {
             let fine = levels.last().map_or(a, |l| &l.matrix);
-            let fine32 = CycleMatrix::new(fine, levels.last().map_or(&finest32, |l| &l.matrix32));
+            let fine32 = levels.last().map_or(&finest32, |l| &l.matrix32);
             let inv_diag = block_jacobi(fine);
             let lambda_max = if levels.is_empty() {
                 top = start_vector(a.dim());
@@ -789,8 +777,8 @@ impl Amg {
     /// the same unknowns; the power iteration continues from the last one's top eigenvector).
     pub fn refresh_finest(&mut self, a: &BlockSparseMatrix) {
         let inv_diag = block_jacobi(a);
-        single_into(&a.values, &mut self.finest32);
-        let a32 = CycleMatrix::new(a, &self.finest32);
+        self.finest32.refill(a);
+        let a32 = &self.finest32;
         let mut lambda_max = SPECTRAL_SAFETY * power_iteration(a32, &inv_diag, &mut self.top, REFRESH_POWER_ITERATIONS);
         if lambda_max <= 0.0 || !lambda_max.is_finite() {
             lambda_max = SPECTRAL_SAFETY * spectral_radius(a32, &inv_diag);
@@ -814,30 +802,41 @@ impl Amg {
     /// `z ≈ A⁻¹ r`: one V-cycle from zero. `a` is the matrix the hierarchy was built from.
     pub fn precondition(&mut self, a: &BlockSparseMatrix, r: &[f64], z: &mut [f64]) {
         self.work[0].b.copy_from_slice(r);
-        let finest = CycleMatrix::new(a, &self.finest32);
-        cycle(&self.levels, &self.smoothers, &self.coarsest, &mut self.work, finest);
+        assert_eq!(self.finest32.n_blocks(), a.n_blocks, "a hierarchy of another matrix");
+        cycle(
+            &self.levels,
+            &self.smoothers,
+            &self.coarsest,
+            &mut self.work,
+            &self.finest32,
+        );
         z.copy_from_slice(&self.work[0].x);
     }
 }
 
 /// V-cycle for the right-hand side in `work[0].b` of `matrix` (the level above `levels[0]`),
 /// into `work[0].x`.
-fn cycle(levels: &[Level], smoothers: &[Smoother], coarsest: &CoarsestSolve, work: &mut [Work], matrix: CycleMatrix) {
+fn cycle(
+    levels: &[Level],
+    smoothers: &[Smoother],
+    coarsest: &CoarsestSolve,
+    work: &mut [Work],
+    matrix: &LevelMatrix32,
+) {
     let Some((level, coarser)) = levels.split_first() else {
         solve_coarsest(coarsest, &work[0].b, &mut work[0].x);
         return;
     };
     let (here, below) = work.split_first_mut().expect("a work set per level");
-    let Work { b, x, r, d, t } = here;
-    chebyshev(matrix, &smoothers[0], b, x, r, d, true);
+    let Work { b, x, r, d, t, scratch } = here;
+    chebyshev(matrix, &smoothers[0], b, x, r, d, scratch, true);
     // The residual after pre-smoothing, restricted; the coarse correction, prolongated.
-    residual_into32(matrix, x, b, r);
+    residual_into32(matrix, x, b, r, scratch);
     level.restriction.mul_vec32(&level.restriction32, r, &mut below[0].b);
-    let coarse = CycleMatrix::new(&level.matrix, &level.matrix32);
-    cycle(coarser, &smoothers[1..], coarsest, below, coarse);
+    cycle(coarser, &smoothers[1..], coarsest, below, &level.matrix32);
     level.prolongator.mul_vec32(&level.prolongator32, &below[0].x, t);
     x.par_iter_mut().zip(t.par_iter()).for_each(|(x, t)| *x += t);
-    chebyshev(matrix, &smoothers[0], b, x, r, d, false);
+    chebyshev(matrix, &smoothers[0], b, x, r, d, scratch, false);
 }
 
 /// The next coarser level from aggregates: the tentative prolongator (each aggregate's blocks
@@ -1005,7 +1004,7 @@ fn coarsen(
     };
     (
         Level {
-            matrix32: single(&matrix.values),
+            matrix32: LevelMatrix32::of(&matrix),
             prolongator32: single(&prolongator.values),
             restriction32: single(&restriction.values),
             matrix,
@@ -1050,13 +1049,15 @@ fn solve_coarsest(solve: &CoarsestSolve, b: &[f64], x: &mut [f64]) {
 /// Tuminaro 2003), `smoother.degree` products (degree one: a block-Jacobi sweep damped by
 /// `1/θ`). `x_is_zero`: start from zero (`x` is
 /// overwritten), otherwise from `x`.
+#[allow(clippy::too_many_arguments)]
 fn chebyshev(
-    a: CycleMatrix,
+    a: &LevelMatrix32,
     smoother: &Smoother,
     b: &[f64],
     x: &mut [f64],
     r: &mut [f64],
     d: &mut [f64],
+    scratch: &mut UpperScratch,
     x_is_zero: bool,
 ) {
     let upper = smoother.lambda_max;
@@ -1079,12 +1080,12 @@ fn chebyshev(
             r.copy_from_slice(b);
         }
     } else {
-        residual_into32(a, x, b, r);
+        residual_into32(a, x, b, r, scratch);
         step_direction(x, d, r, inv, Direction::First { theta }, false, smoother.degree > 1);
     }
     for k in 1..smoother.degree {
         // r −= A d (r = b − A x), then the next direction.
-        subtract_product32(a, d, r);
+        subtract_product32(a, d, r, scratch);
         let rho_next = 1.0 / (2.0 * sigma - rho);
         let keep = rho_next * rho;
         let push = 2.0 * rho_next / delta;
@@ -1247,8 +1248,7 @@ mod tests {
             a.n_blocks
         );
         let inv = block_jacobi(&a);
-        let a32 = single(&a.values);
-        let lambda = SPECTRAL_SAFETY * spectral_radius(CycleMatrix::new(&a, &a32), &inv);
+        let lambda = SPECTRAL_SAFETY * spectral_radius(&LevelMatrix32::of(&a), &inv);
         let (level, coarse_space) = coarsen(&a, lambda, &space, &agg, n_agg, &strong);
         let n_agg = level.matrix.n_blocks;
         assert_eq!(coarse_space.rows.len(), n_agg);
@@ -1280,8 +1280,7 @@ mod tests {
     fn the_spectral_radius_is_estimated_from_below_and_close() {
         let a = grid(16, 1.0, 1e-2);
         let inv = block_jacobi(&a);
-        let a32 = single(&a.values);
-        let estimate = spectral_radius(CycleMatrix::new(&a, &a32), &inv);
+        let estimate = spectral_radius(&LevelMatrix32::of(&a), &inv);
         // Dense D^{-½} A D^{-½}: the exact largest eigenvalue.
         let n = a.dim();
         let dense = a.to_dense();

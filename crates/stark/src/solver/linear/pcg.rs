@@ -367,6 +367,26 @@ pub fn solve_preconditioned(
     max_iterations: usize,
     precondition: &mut dyn FnMut(&[f64], &mut [f64]),
 ) -> CgInfo {
+    solve_with_product(
+        &mut |p, ap| a.mul_vec_dot(p, ap),
+        b,
+        x,
+        tolerance,
+        max_iterations,
+        precondition,
+    )
+}
+
+/// [`solve_preconditioned`] with the product given: `product(p, ap)` sets `ap = A p` and returns
+/// `p · ap` (e.g. over the matrix's upper triangle, [`UpperTriangle::product_dot`]).
+pub fn solve_with_product(
+    product: &mut dyn FnMut(&[f64], &mut [f64]) -> f64,
+    b: &[f64],
+    x: &mut [f64],
+    tolerance: f64,
+    max_iterations: usize,
+    precondition: &mut dyn FnMut(&[f64], &mut [f64]),
+) -> CgInfo {
     let n = b.len();
     x.iter_mut().for_each(|v| *v = 0.0);
     let mut r = b.to_vec();
@@ -384,7 +404,7 @@ pub fn solve_preconditioned(
         return info;
     }
     while info.iterations < max_iterations {
-        let pap = a.mul_vec_dot(&p, &mut ap);
+        let pap = product(&p, &mut ap);
         if pap <= 0.0 || !pap.is_finite() {
             info.indefinite = true;
             break;
