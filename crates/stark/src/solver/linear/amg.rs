@@ -75,6 +75,53 @@ fn transpose(a: &Block) -> Block {
     [a[0], a[3], a[6], a[1], a[4], a[7], a[2], a[5], a[8]]
 }
 
+/// A 3×3 block being summed: each row padded to four lanes, so that a row is one aligned
+/// vector (rows stored as overlapping 4-wide vectors would defeat the store-to-load forwarding
+/// between consecutive additions to the same block).
+#[derive(Clone, Copy, Default)]
+#[repr(C, align(32))]
+struct PaddedBlock([[f64; 4]; 3]);
+
+impl PaddedBlock {
+    fn block(&self) -> Block {
+        let [r0, r1, r2] = &self.0;
+        [r0[0], r0[1], r0[2], r1[0], r1[1], r1[2], r2[0], r2[1], r2[2]]
+    }
+}
+
+/// `acc += a b` (3×3 blocks, row-major): row `i` of the product is `Σ_k a_ik b_k·`.
+#[inline(always)]
+fn multiply_add(acc: &mut PaddedBlock, a: &Block, b: &Block) {
+    #[cfg(all(target_arch = "x86_64", target_feature = "avx2", target_feature = "fma"))]
+    // SAFETY: AVX2 and FMA are compile-time features. The rows of `b` are read as 4-wide
+    // vectors whose lane 3 is the next row's first entry (the third row's is masked); it lands
+    // in `acc`'s padding lane, never read.
+    unsafe {
+        use std::arch::x86_64::*;
+        let first3 = _mm256_set_epi64x(0, -1, -1, -1);
+        let bp = b.as_ptr();
+        let b0 = _mm256_loadu_pd(bp);
+        let b1 = _mm256_loadu_pd(bp.add(3));
+        let b2 = _mm256_maskload_pd(bp.add(6), first3);
+        for (i, row) in acc.0.iter_mut().enumerate() {
+            let c = _mm256_load_pd(row.as_ptr());
+            let c = _mm256_fmadd_pd(_mm256_set1_pd(a[3 * i]), b0, c);
+            let c = _mm256_fmadd_pd(_mm256_set1_pd(a[3 * i + 1]), b1, c);
+            let c = _mm256_fmadd_pd(_mm256_set1_pd(a[3 * i + 2]), b2, c);
+            _mm256_store_pd(row.as_mut_ptr(), c);
+        }
+    }
+    #[cfg(not(all(target_arch = "x86_64", target_feature = "avx2", target_feature = "fma")))]
+    {
+        let p = mul(a, b);
+        for (i, row) in acc.0.iter_mut().enumerate() {
+            for j in 0..3 {
+                row[j] += p[3 * i + j];
+            }
+        }
+    }
+}
+
 #[inline]
 fn add_scaled(acc: &mut Block, s: f64, b: &Block) {
     for (x, y) in acc.iter_mut().zip(b) {
@@ -264,21 +311,22 @@ impl BlockRows {
                 (lengths, entries)
             })
             .collect();
+        let total = chunks.iter().map(|(_, entries)| entries.len()).sum();
         let mut out = BlockRows {
             n_cols,
             row_start: Vec::with_capacity(n_rows + 1),
-            cols: Vec::new(),
-            values: Vec::new(),
+            cols: Vec::with_capacity(total),
+            values: Vec::with_capacity(total),
         };
         out.row_start.push(0);
-        for (lengths, entries) in chunks {
-            for l in lengths {
-                out.row_start.push(out.row_start.last().unwrap() + l);
-            }
-            for (c, v) in entries {
-                out.cols.push(c);
-                out.values.push(v);
-            }
+        for (lengths, entries) in &chunks {
+            let mut end = *out.row_start.last().expect("row 0 starts");
+            out.row_start.extend(lengths.iter().map(|l| {
+                end += l;
+                end
+            }));
+            out.cols.extend(entries.iter().map(|e| e.0));
+            out.values.extend(entries.iter().map(|e| e.1));
         }
         out
     }
@@ -339,7 +387,7 @@ impl BlockRows {
 struct RowAccumulator {
     slot: Vec<u32>,
     touched: Vec<u32>,
-    sums: Vec<Block>,
+    sums: Vec<PaddedBlock>,
 }
 
 impl RowAccumulator {
@@ -353,27 +401,30 @@ impl RowAccumulator {
         }
     }
 
-    fn add(&mut self, c: usize, s: f64, b: &Block) {
+    /// Column `c` of the row `+= l r`.
+    #[inline(always)]
+    fn add_product(&mut self, c: usize, l: &Block, r: &Block) {
         let k = self.slot[c];
-        if k == Self::EMPTY {
+        let sum = if k == Self::EMPTY {
             self.slot[c] = self.touched.len() as u32;
             self.touched.push(c as u32);
-            let mut v = [0.0; 9];
-            add_scaled(&mut v, s, b);
-            self.sums.push(v);
+            self.sums.push(PaddedBlock::default());
+            self.sums.last_mut().expect("just pushed")
         } else {
-            add_scaled(&mut self.sums[k as usize], s, b);
-        }
+            &mut self.sums[k as usize]
+        };
+        multiply_add(sum, l, r);
     }
 
     /// Append the row, sorted by column, to `out` and reset.
     fn drain_into(&mut self, out: &mut Vec<(u32, Block)>) {
-        let start = out.len();
-        for (&c, v) in self.touched.iter().zip(&self.sums) {
-            out.push((c, *v));
-            self.slot[c as usize] = Self::EMPTY;
+        // Sort the columns (4 bytes each), then gather the sums (72 each) in that order.
+        self.touched.sort_unstable();
+        out.reserve(self.touched.len());
+        for &c in &self.touched {
+            let k = std::mem::replace(&mut self.slot[c as usize], Self::EMPTY);
+            out.push((c, self.sums[k as usize].block()));
         }
-        out[start..].sort_unstable_by_key(|e| e.0);
         self.touched.clear();
         self.sums.clear();
     }
@@ -414,7 +465,7 @@ where
             for (k, l) in left_row(r) {
                 for (c, rb) in right.row(k) {
                     if c >= first {
-                        acc.add(c, 1.0, &mul(l, rb));
+                        acc.add_product(c, l, rb);
                     }
                 }
             }
@@ -957,26 +1008,7 @@ fn coarsen(
     // Its upper block triangle, and the lower one as the upper's transpose (exactly symmetric,
     // half the products).
     let upper = product_from(n_coarse, &ap, |r| restriction.row(r), |r| r);
-    let lower = upper.transposed();
-    let coarse = BlockRows::from_rows(n_coarse, n_coarse, |r, out| {
-        out.extend(lower.row(r).filter(|&(c, _)| c < r).map(|(c, b)| (c as u32, *b)));
-        out.extend(upper.row(r).map(|(c, b)| (c as u32, *b)));
-    });
-    let mut matrix = BlockSparseMatrix {
-        n_blocks: n_coarse,
-        diagonal: Vec::with_capacity(n_coarse),
-        row_start: coarse.row_start,
-        cols: coarse.cols,
-        values: coarse.values,
-    };
-    for r in 0..n_coarse {
-        let span = matrix.row_start[r]..matrix.row_start[r + 1];
-        // P's column blocks of an aggregate are nonzero on its blocks: PᵀAP has its diagonal.
-        let k = matrix.cols[span.clone()]
-            .binary_search(&(r as u32))
-            .expect("the coarse matrix has its diagonal");
-        matrix.diagonal.push(span.start + k);
-    }
+    let mut matrix = mirrored(&upper);
     // Coarse unknowns without a mode are decoupled: a unit diagonal (their right-hand side is
     // always zero, so they stay zero).
     let mean_diagonal = {
@@ -1013,6 +1045,54 @@ fn coarsen(
         },
         coarse_space,
     )
+}
+
+/// The symmetric matrix whose upper block triangle is `upper` (each row's columns from its
+/// diagonal on, sorted), written in place: each row's lower part (the transposed blocks of the
+/// rows above, in row order: sorted), then its upper part.
+fn mirrored(upper: &BlockRows) -> BlockSparseMatrix {
+    let n = upper.n_rows();
+    let mut lower_len = vec![0usize; n];
+    for r in 0..n {
+        // P's column blocks of an aggregate are nonzero on its blocks: PᵀAP has its diagonal.
+        assert_eq!(
+            upper.row(r).next().map(|(c, _)| c),
+            Some(r),
+            "the coarse matrix has its diagonal"
+        );
+        for (c, _) in upper.row(r).skip(1) {
+            lower_len[c] += 1;
+        }
+    }
+    let mut row_start = Vec::with_capacity(n + 1);
+    row_start.push(0);
+    for r in 0..n {
+        row_start.push(row_start[r] + lower_len[r] + (upper.row_start[r + 1] - upper.row_start[r]));
+    }
+    let total = row_start[n];
+    let mut cols = vec![0u32; total];
+    let mut values = vec![[0.0; 9]; total];
+    let diagonal: Vec<usize> = (0..n).map(|r| row_start[r] + lower_len[r]).collect();
+    // The next free place of each row's lower part.
+    let mut next_lower = row_start[..n].to_vec();
+    for r in 0..n {
+        for (k, (c, b)) in upper.row(r).enumerate() {
+            cols[diagonal[r] + k] = c as u32;
+            values[diagonal[r] + k] = *b;
+            if c != r {
+                cols[next_lower[c]] = r as u32;
+                values[next_lower[c]] = transpose(b);
+                next_lower[c] += 1;
+            }
+        }
+    }
+    BlockSparseMatrix {
+        n_blocks: n,
+        row_start,
+        cols,
+        diagonal,
+        values,
+    }
 }
 
 fn coarsest_solve(a: &BlockSparseMatrix) -> CoarsestSolve {
