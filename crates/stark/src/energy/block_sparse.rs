@@ -393,16 +393,16 @@ impl<B: StoredBlock> UpperTriangle<B> {
         &self.values[self.row_start[r]]
     }
 
-    /// `combine(y_r, (A x)_r)` for every block row `r` of `y` (in parallel over fixed tasks).
+    /// `combine(r, y_r, (A x)_r)` for every block row `r` of `y` (in parallel over fixed tasks).
     pub fn product_with(
         &self,
         x: &[f64],
         y: &mut [f64],
         scratch: &mut UpperScratch,
-        combine: impl Fn(&mut [f64], [f64; 3]) + Sync,
+        combine: impl Fn(usize, &mut [f64], [f64; 3]) + Sync,
     ) {
-        self.product_tasks(x, y, scratch, |_, yr, p| {
-            combine(yr, p);
+        self.product_tasks(x, y, scratch, |r, yr, p| {
+            combine(r, yr, p);
             0.0
         });
     }
@@ -471,7 +471,7 @@ impl<B: StoredBlock> UpperTriangle<B> {
 
     /// `y = A x`.
     pub fn product(&self, x: &[f64], y: &mut [f64], scratch: &mut UpperScratch) {
-        self.product_with(x, y, scratch, |yr, p| yr.copy_from_slice(&p));
+        self.product_with(x, y, scratch, |_, yr, p| yr.copy_from_slice(&p));
     }
 
     /// One task's rows `rows`: `acc[r − first]` gets row `r`'s own product and the transposed

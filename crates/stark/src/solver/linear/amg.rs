@@ -257,7 +257,7 @@ type LevelMatrix32 = UpperTriangle<Block32>;
 
 /// `r −= A x` over the rounded matrix.
 fn subtract_product32(a: &LevelMatrix32, x: &[f64], r: &mut [f64], scratch: &mut UpperScratch) {
-    a.product_with(x, r, scratch, |rr, p| {
+    a.product_with(x, r, scratch, |_, rr, p| {
         for i in 0..3 {
             rr[i] -= p[i];
         }
@@ -266,8 +266,11 @@ fn subtract_product32(a: &LevelMatrix32, x: &[f64], r: &mut [f64], scratch: &mut
 
 /// `r = b − A x` over the rounded matrix.
 fn residual_into32(a: &LevelMatrix32, x: &[f64], b: &[f64], r: &mut [f64], scratch: &mut UpperScratch) {
-    r.copy_from_slice(b);
-    subtract_product32(a, x, r, scratch);
+    a.product_with(x, r, scratch, |row, rr, p| {
+        for i in 0..3 {
+            rr[i] = b[3 * row + i] - p[i];
+        }
+    });
 }
 
 /// A rectangular matrix of 3×3 blocks, rows compressed (the prolongator and its transpose).
@@ -719,10 +722,9 @@ struct Work {
     /// Right-hand side and solution.
     b: Vec<f64>,
     x: Vec<f64>,
-    /// Residual, Chebyshev direction, product scratch.
+    /// Residual, Chebyshev direction.
     r: Vec<f64>,
     d: Vec<f64>,
-    t: Vec<f64>,
     /// The symmetric products' scratch.
     scratch: UpperScratch,
 }
@@ -734,7 +736,6 @@ impl Work {
             x: vec![0.0; n],
             r: vec![0.0; n],
             d: vec![0.0; n],
-            t: vec![0.0; n],
             scratch: UpperScratch::default(),
         }
     }
@@ -879,14 +880,17 @@ fn cycle(
         return;
     };
     let (here, below) = work.split_first_mut().expect("a work set per level");
-    let Work { b, x, r, d, t, scratch } = here;
+    let Work { b, x, r, d, scratch } = here;
     chebyshev(matrix, &smoothers[0], b, x, r, d, scratch, true);
     // The residual after pre-smoothing, restricted; the coarse correction, prolongated.
     residual_into32(matrix, x, b, r, scratch);
     level.restriction.mul_vec32(&level.restriction32, r, &mut below[0].b);
     cycle(coarser, &smoothers[1..], coarsest, below, &level.matrix32);
-    level.prolongator.mul_vec32(&level.prolongator32, &below[0].x, t);
-    x.par_iter_mut().zip(t.par_iter()).for_each(|(x, t)| *x += t);
+    CycleMatrix::of_rows(&level.prolongator, &level.prolongator32).each_row_product(&below[0].x, x, |xr, p| {
+        for i in 0..3 {
+            xr[i] += p[i];
+        }
+    });
     chebyshev(matrix, &smoothers[0], b, x, r, d, scratch, false);
 }
 
