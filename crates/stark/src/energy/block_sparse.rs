@@ -339,10 +339,13 @@ impl<B: StoredBlock> UpperTriangle<B> {
         self.row_start.push(0);
         for r in 0..n {
             let upper = &a.cols[a.diagonal[r]..a.row_start[r + 1]];
-            // The product reads `x` at each column unchecked.
+            // The product reads `x` at each column and writes its task's rows from `r` on,
+            // unchecked: the row starts at its diagonal, increases, and stays inside the matrix.
             assert!(
-                upper.iter().all(|&c| (c as usize) < n),
-                "row {r}: a column beyond the matrix"
+                upper.first() == Some(&(r as u32))
+                    && upper.windows(2).all(|w| w[0] < w[1])
+                    && upper.iter().all(|&c| (c as usize) < n),
+                "row {r}: not an upper triangle's row"
             );
             self.cols.extend_from_slice(upper);
             self.row_start.push(self.cols.len());

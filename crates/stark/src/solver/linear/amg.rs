@@ -16,7 +16,9 @@
 //! The cycle reads its matrices (each level's, the prolongators, the smoothers' inverted
 //! diagonal blocks) rounded to single precision: its passes over them are memory-bound, and a
 //! cycle over rounded matrices is still a fixed symmetric operator (a hanging 128² cloth: the
-//! same CG iterations, the linear solve −23%).
+//! same CG iterations, the linear solve −23%). Each level's matrix is read as its upper block
+//! triangle alone ([`UpperTriangle`]: every off-diagonal block applied to both its rows), as is
+//! the finest one in CG's own product: half the bytes again.
 //!
 //! Where it stands (BENCHMARKS.md, "Algebraic multigrid"): CG's iteration count stays nearly flat
 //! under refinement (a membrane-like grid: 13–14 from 16² to 128²; the hanging cloths with the
