@@ -567,7 +567,7 @@ fn list() {
 }
 
 /// glibc hands blocks above its mmap threshold back to the system when they are freed, and the
-/// next allocation of that size faults its pages in again, zeroed (~1 µs per 4 KiB page here):
+/// next allocation of that size faults its pages in again, zeroed (1–2 µs per 4 KiB page here):
 /// a multigrid set-up at every step allocates and frees tens of MB. Blocks up to the threshold's
 /// ceiling (32 MiB) come from the heap instead, which keeps freed memory for reuse.
 #[cfg(all(target_os = "linux", target_env = "gnu"))]

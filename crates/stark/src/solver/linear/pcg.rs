@@ -378,7 +378,8 @@ pub fn solve_preconditioned(
 }
 
 /// [`solve_preconditioned`] with the product given: `product(p, ap)` sets `ap = A p` and returns
-/// `p · ap` (e.g. over the matrix's upper triangle, [`UpperTriangle::product_dot`]).
+/// `p · ap` (e.g. over the matrix's upper triangle,
+/// [`super::block_sparse::UpperTriangle::product_dot`]).
 pub fn solve_with_product(
     product: &mut dyn FnMut(&[f64], &mut [f64]) -> f64,
     b: &[f64],
