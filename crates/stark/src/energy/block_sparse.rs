@@ -391,11 +391,6 @@ impl<B: StoredBlock> UpperTriangle<B> {
         self.n_blocks
     }
 
-    /// Diagonal block of row `r`.
-    pub fn diagonal(&self, r: usize) -> &B {
-        &self.values[self.row_start[r]]
-    }
-
     /// `combine(r, y_r, (A x)_r)` for every block row `r` of `y` (in parallel over fixed tasks).
     pub fn product_with(
         &self,

@@ -482,8 +482,14 @@ where
 /// `λ_max(D⁻¹A)` from below, by power iteration from a fixed start (the Rayleigh quotient of the
 /// symmetric `D^{-½} A D^{-½}`, in `A`'s inner product), on `A` rounded to single precision (the
 /// cycle's matrix, and half the bytes per pass).
-fn spectral_radius(a: &LevelMatrix32, inv_diag: &[Block]) -> f64 {
-    power_iteration(a, inv_diag, &mut start_vector(inv_diag.len() * 3), POWER_ITERATIONS)
+fn spectral_radius(a: &LevelMatrix32, inv_diag: &[Block], work: &mut Work) -> f64 {
+    power_iteration(
+        a,
+        inv_diag,
+        &mut start_vector(inv_diag.len() * 3),
+        POWER_ITERATIONS,
+        work,
+    )
 }
 
 /// A fixed pseudo-random start: not orthogonal to the top mode, the same every run.
@@ -497,17 +503,17 @@ fn start_vector(n: usize) -> Vec<f64> {
 }
 
 /// `iterations` power iterations on `D⁻¹A` from `x` (left at the last iterate); the last
-/// Rayleigh quotient.
-fn power_iteration(a: &LevelMatrix32, inv_diag: &[Block], x: &mut [f64], iterations: usize) -> f64 {
-    let n = x.len();
-    let mut ax = vec![0.0; n];
-    let mut scratch = UpperScratch::default();
-    let mut y = vec![0.0; n];
+/// Rayleigh quotient. The level's cycle vectors serve as scratch (`r` for `A x`, `d` for
+/// `D⁻¹A x`).
+fn power_iteration(a: &LevelMatrix32, inv_diag: &[Block], x: &mut [f64], iterations: usize, work: &mut Work) -> f64 {
+    let Work {
+        r: ax, d: y, scratch, ..
+    } = work;
     let mut lambda = 0.0;
     for _ in 0..iterations {
         // The estimate only sets the smoother's interval: the rounded matrix serves.
-        a.product(x, &mut ax, &mut scratch);
-        let xax = dot(x, &ax);
+        a.product(x, ax, scratch);
+        let xax = dot(x, ax);
         // y = D⁻¹ A x
         y.par_chunks_mut(3)
             .zip(ax.par_chunks(3))
@@ -515,16 +521,16 @@ fn power_iteration(a: &LevelMatrix32, inv_diag: &[Block], x: &mut [f64], iterati
             .for_each(|((y, r), m)| {
                 y.copy_from_slice(&apply(m, r));
             });
-        let axy = dot(&ax, &y);
+        let axy = dot(ax, y);
         if xax <= 0.0 || !axy.is_finite() {
             break;
         }
         lambda = axy / xax;
-        let norm = dot(&y, &y).sqrt();
+        let norm = dot(y, y).sqrt();
         if norm == 0.0 {
             break;
         }
-        x.par_iter_mut().zip(&y).for_each(|(x, y)| *x = y / norm);
+        x.par_iter_mut().zip(&*y).for_each(|(x, y)| *x = y / norm);
     }
     lambda
 }
@@ -777,16 +783,20 @@ impl Amg {
         let mut levels: Vec<Level> = Vec::new();
         let mut smoothers = Vec::new();
         let mut top = Vec::new();
+        let mut work = Vec::new();
         let finest32 = LevelMatrix32::of(a);
         loop {
             let fine = levels.last().map_or(a, |l| &l.matrix);
             let fine32 = levels.last().map_or(&finest32, |l| &l.matrix32);
             let inv_diag = block_jacobi(fine);
+            // The level's cycle vectors, first the power iteration's scratch.
+            work.push(Work::new(fine.dim()));
+            let level_work = work.last_mut().expect("just pushed");
             let lambda_max = if levels.is_empty() {
                 top = start_vector(a.dim());
-                SPECTRAL_SAFETY * power_iteration(fine32, &inv_diag, &mut top, POWER_ITERATIONS)
+                SPECTRAL_SAFETY * power_iteration(fine32, &inv_diag, &mut top, POWER_ITERATIONS, level_work)
             } else {
-                SPECTRAL_SAFETY * spectral_radius(fine32, &inv_diag)
+                SPECTRAL_SAFETY * spectral_radius(fine32, &inv_diag, level_work)
             };
             let done = fine.n_blocks <= COARSEST_BLOCKS || levels.len() + 1 >= MAX_LEVELS;
             let next = if done {
@@ -807,10 +817,6 @@ impl Amg {
             }
         }
         let coarsest = coarsest_solve(levels.last().map_or(a, |l| &l.matrix));
-        let work = std::iter::once(a.dim())
-            .chain(levels.iter().map(|l| l.matrix.dim()))
-            .map(Work::new)
-            .collect();
         Amg {
             levels,
             smoothers,
@@ -833,9 +839,11 @@ impl Amg {
         let inv_diag = block_jacobi(a);
         self.finest32.refill(a);
         let a32 = &self.finest32;
-        let mut lambda_max = SPECTRAL_SAFETY * power_iteration(a32, &inv_diag, &mut self.top, REFRESH_POWER_ITERATIONS);
+        let finest_work = &mut self.work[0];
+        let mut lambda_max =
+            SPECTRAL_SAFETY * power_iteration(a32, &inv_diag, &mut self.top, REFRESH_POWER_ITERATIONS, finest_work);
         if lambda_max <= 0.0 || !lambda_max.is_finite() {
-            lambda_max = SPECTRAL_SAFETY * spectral_radius(a32, &inv_diag);
+            lambda_max = SPECTRAL_SAFETY * spectral_radius(a32, &inv_diag, finest_work);
         }
         let finest = &mut self.smoothers[0];
         single_into(&inv_diag, &mut finest.inv_diag32);
@@ -1334,7 +1342,7 @@ mod tests {
             a.n_blocks
         );
         let inv = block_jacobi(&a);
-        let lambda = SPECTRAL_SAFETY * spectral_radius(&LevelMatrix32::of(&a), &inv);
+        let lambda = SPECTRAL_SAFETY * spectral_radius(&LevelMatrix32::of(&a), &inv, &mut Work::new(a.dim()));
         let (level, coarse_space) = coarsen(&a, lambda, &space, &agg, n_agg, &strong);
         let n_agg = level.matrix.n_blocks;
         assert_eq!(coarse_space.rows.len(), n_agg);
@@ -1366,7 +1374,7 @@ mod tests {
     fn the_spectral_radius_is_estimated_from_below_and_close() {
         let a = grid(16, 1.0, 1e-2);
         let inv = block_jacobi(&a);
-        let estimate = spectral_radius(&LevelMatrix32::of(&a), &inv);
+        let estimate = spectral_radius(&LevelMatrix32::of(&a), &inv, &mut Work::new(a.dim()));
         // Dense D^{-½} A D^{-½}: the exact largest eigenvalue.
         let n = a.dim();
         let dense = a.to_dense();
