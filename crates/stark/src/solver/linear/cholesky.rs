@@ -13,8 +13,11 @@
 
 use super::block_sparse::BlockSparseMatrix;
 use super::pcg;
+use super::supernodal::{self, FactorScalar, LowerColumns, SupernodeTree};
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
-use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, LltRef, SymbolicCholesky, SymmetricOrdering};
+use faer::sparse::linalg::cholesky::{
+    factorize_symbolic_cholesky, LltRef, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
+};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::{Conj, MatMut, Par, Side};
 
@@ -46,6 +49,9 @@ struct Analysis {
     /// With our own ordering the matrix is gathered already permuted (`P A Pᵀ`, so faer need
     /// not permute it at each factorisation): the old scalar index of each new one.
     forward: Option<Vec<usize>>,
+    /// The supernodal elimination tree, when faer's analysis is supernodal (our own numeric
+    /// factorisation then, its subtrees in parallel: [`supernodal`]).
+    tree: Option<SupernodeTree>,
 }
 
 /// The fill-reducing ordering: METIS's nested dissection of the block graph, each block's three
@@ -281,7 +287,12 @@ impl CholeskySolver {
             ),
         }
         .map_err(|e| CholeskyError::Analysis(format!("{e:?}")))?;
+        let tree = match (symbolic_llt.raw(), symbolic_llt.perm()) {
+            (SymbolicCholeskyRaw::Supernodal(supernodal), None) => Some(SupernodeTree::new(supernodal)),
+            _ => None,
+        };
         Ok(Analysis {
+            tree,
             pattern_id,
             symbolic_matrix,
             symbolic_llt,
@@ -300,28 +311,16 @@ impl CholeskySolver {
         par: Par,
         buffer: &mut MemBuffer,
     ) {
-        let n = z.len();
-        let llt = LltRef::new(&an.symbolic_llt, factor);
         match &an.forward {
             Some(forward) => {
                 scratch.clear();
                 scratch.extend(forward.iter().map(|&old| z[old]));
-                llt.solve_in_place_with_conj(
-                    Conj::No,
-                    MatMut::from_column_major_slice_mut(scratch, n, 1),
-                    par,
-                    MemStack::new(buffer),
-                );
+                solve_factor(an, factor, scratch, par, buffer);
                 for (&old, &y) in forward.iter().zip(scratch.iter()) {
                     z[old] = y;
                 }
             }
-            None => llt.solve_in_place_with_conj(
-                Conj::No,
-                MatMut::from_column_major_slice_mut(z, n, 1),
-                par,
-                MemStack::new(buffer),
-            ),
+            None => solve_factor(an, factor, z, par, buffer),
         }
     }
 
@@ -446,9 +445,20 @@ impl CholeskySolver {
     }
 }
 
+/// `x ← (L Lᵀ)⁻¹ x` with `an`'s factor (in the analysis' order).
+fn solve_factor<T: FactorScalar>(an: &Analysis, factor: &[T], x: &mut [T], par: Par, buffer: &mut MemBuffer) {
+    let n = x.len();
+    LltRef::new(&an.symbolic_llt, factor).solve_in_place_with_conj(
+        Conj::No,
+        MatMut::from_column_major_slice_mut(x, n, 1),
+        par,
+        MemStack::new(buffer),
+    );
+}
+
 /// The numeric factorisation `L Lᵀ` of `values` (the lower triangle in `an`'s pattern) into
 /// `factor`, in `T`'s precision, with the workspace in `slot` (sized for the solves too).
-fn factorise_numeric<'w, T: faer::traits::ComplexField + Copy + Default>(
+fn factorise_numeric<'w, T: FactorScalar>(
     an: &Analysis,
     values: &[T],
     factor: &mut Vec<T>,
@@ -462,6 +472,16 @@ fn factorise_numeric<'w, T: faer::traits::ComplexField + Copy + Default>(
     ]);
     let buffer = workspace(slot, req, par).map_err(|e| e.to_string())?;
     factor.resize(symbolic.len_val(), T::default());
+    if let (Some(tree), SymbolicCholeskyRaw::Supernodal(supernodal)) = (&an.tree, symbolic.raw()) {
+        let m = &an.symbolic_matrix;
+        let lower = LowerColumns {
+            col_ptr: m.col_ptr(),
+            row_idx: m.row_idx(),
+            values,
+        };
+        supernodal::factorize(supernodal, tree, &lower, factor)?;
+        return Ok(buffer);
+    }
     symbolic
         .factorize_numeric_llt(
             factor,
@@ -512,7 +532,6 @@ impl SingleFactor {
 
     /// `z ≈ A⁻¹ r` with the factor (`z = S (L Lᵀ)⁻¹ S r` in the analysis' order).
     fn apply(&mut self, an: &Analysis, r: &[f64], z: &mut [f64]) {
-        let n = r.len();
         self.rhs.clear();
         match &an.forward {
             Some(forward) => self
@@ -521,12 +540,7 @@ impl SingleFactor {
             None => self.rhs.extend(r.iter().zip(&self.scale).map(|(v, s)| (v * s) as f32)),
         }
         let (buffer, par, _) = self.workspace.as_mut().expect("workspace of the factorisation");
-        LltRef::new(&an.symbolic_llt, &self.factor).solve_in_place_with_conj(
-            Conj::No,
-            MatMut::from_column_major_slice_mut(&mut self.rhs, n, 1),
-            *par,
-            MemStack::new(buffer),
-        );
+        solve_factor(an, &self.factor, &mut self.rhs, *par, buffer);
         match &an.forward {
             Some(forward) => {
                 for ((&old, &y), s) in forward.iter().zip(&self.rhs).zip(&self.scale) {

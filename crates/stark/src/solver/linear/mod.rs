@@ -6,5 +6,6 @@ pub use crate::energy::block_sparse;
 pub mod amg;
 pub mod cholesky;
 pub mod pcg;
+pub mod supernodal;
 
 pub use block_sparse::BlockSparseMatrix;

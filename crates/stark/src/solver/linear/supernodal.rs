@@ -1,0 +1,604 @@
+//! The numeric supernodal Cholesky factorisation `L Lᵀ` over faer's symbolic analysis, with the
+//! elimination tree's independent subtrees factorised on different threads.
+//!
+//! faer 0.24 factorises the supernodes one after the other (parallel only inside each
+//! supernode's dense kernels, which are small in a cloth's or a towel's factor), so a second
+//! thread sat idle through half of a folded towel's Newton iteration. The supernodes of two
+//! disjoint subtrees of the elimination tree never read each other's columns: under nested
+//! dissection the two halves of each separator are such subtrees. Here every supernode is
+//! factorised *left-looking* — its columns gathered from the matrix, then the updates of the
+//! supernodes below it that reach its rows subtracted in ascending order, then a dense Cholesky
+//! of its diagonal block and a triangular solve for the rows below — by one thread, once all of
+//! its subtree is done. Each supernode's arithmetic is the same whichever thread runs it and
+//! whatever ran beside it, so the factor is bit-identical at any thread count.
+//!
+//! The factor is written in faer's supernodal layout (each supernode's columns column-major,
+//! its diagonal block's rows first, then its pattern's), so faer's solves read it.
+
+use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::linalg::cholesky::llt::factor::{cholesky_in_place, cholesky_in_place_scratch, LltError};
+use faer::reborrow::{Reborrow, ReborrowMut};
+use faer::sparse::linalg::cholesky::supernodal::SymbolicSupernodalCholesky;
+use faer::{Accum, MatMut, MatRef, Par};
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
+
+/// A subtree with less work than this (multiply-adds, estimated) is factorised on the thread
+/// that reached it: forking costs more than it saves.
+const FORK_ABOVE_WORK: f64 = 2.0e5;
+
+/// The scalars the factor is computed in (single or double precision).
+pub trait FactorScalar:
+    faer::traits::ComplexField + Copy + Default + Send + Sync + std::ops::AddAssign + std::ops::SubAssign
+{
+    /// One.
+    const ONE: Self;
+}
+
+impl FactorScalar for f32 {
+    const ONE: f32 = 1.0;
+}
+
+impl FactorScalar for f64 {
+    const ONE: f64 = 1.0;
+}
+
+/// The supernodal elimination tree of one symbolic analysis and, per supernode, the supernodes
+/// whose columns update it.
+pub struct SupernodeTree {
+    /// The first column of each supernode, and the column count last.
+    begin: Vec<usize>,
+    /// Supernodes with a row of their pattern in supernode `s`'s columns, ascending:
+    /// `updates[update_start[s]..update_start[s + 1]]`.
+    update_start: Vec<usize>,
+    updates: Vec<Update>,
+    /// Children in the elimination tree: `children[child_start[s]..child_start[s + 1]]`.
+    child_start: Vec<usize>,
+    children: Vec<u32>,
+    roots: Vec<u32>,
+    /// Estimated multiply-adds of each supernode's subtree.
+    subtree_work: Vec<f64>,
+    /// The largest supernode (columns) and the longest update block (rows × columns).
+    max_columns: usize,
+    max_update: usize,
+}
+
+impl SupernodeTree {
+    /// The tree of `symbolic`.
+    pub fn new(symbolic: &SymbolicSupernodalCholesky<usize>) -> Self {
+        let n_super = symbolic.n_supernodes();
+        let mut begin = symbolic.supernode_begin().to_vec();
+        begin.push(symbolic.supernode_end().last().copied().unwrap_or(0));
+        let (row_ptr, rows, nnz) = (
+            symbolic.col_ptr_for_row_idx(),
+            symbolic.row_idx(),
+            symbolic.nnz_per_super(),
+        );
+        let pattern = |s: usize| &rows[row_ptr[s]..row_ptr[s] + nnz[s]];
+        let mut supernode_of_col = vec![0u32; symbolic.nrows()];
+        for s in 0..n_super {
+            supernode_of_col[begin[s]..begin[s + 1]].fill(s as u32);
+        }
+        // The supernodes each pattern reaches (rows sorted, so each reached supernode once, in
+        // ascending order), collected per reached supernode: ascending in the updater.
+        let mut reached: Vec<Vec<Update>> = vec![Vec::new(); n_super];
+        let mut parent = vec![u32::MAX; n_super];
+        let mut max_update = 0;
+        for d in 0..n_super {
+            let p = pattern(d);
+            let mut last = u32::MAX;
+            for (k, &row) in p.iter().enumerate() {
+                let s = supernode_of_col[row];
+                if s != last {
+                    let below = p.len() - k;
+                    let within = p[k..].partition_point(|&r| r < begin[s as usize + 1]);
+                    max_update = max_update.max(below * within);
+                    reached[s as usize].push(Update {
+                        d: d as u32,
+                        first: k as u32,
+                        within: within as u32,
+                    });
+                    last = s;
+                }
+            }
+            if let Some(&row) = p.first() {
+                parent[d] = supernode_of_col[row];
+            }
+        }
+        let mut update_start = Vec::with_capacity(n_super + 1);
+        let mut updates = Vec::new();
+        update_start.push(0);
+        for list in &reached {
+            updates.extend_from_slice(list);
+            update_start.push(updates.len());
+        }
+        let mut child_count = vec![0usize; n_super + 1];
+        for &p in parent.iter().filter(|&&p| p != u32::MAX) {
+            child_count[p as usize + 1] += 1;
+        }
+        for s in 0..n_super {
+            child_count[s + 1] += child_count[s];
+        }
+        let child_start = child_count;
+        let mut fill = child_start.clone();
+        let mut children = vec![0u32; child_start[n_super]];
+        let mut roots = Vec::new();
+        for (d, &p) in parent.iter().enumerate() {
+            if p == u32::MAX {
+                roots.push(d as u32);
+            } else {
+                children[fill[p as usize]] = d as u32;
+                fill[p as usize] += 1;
+            }
+        }
+        // Children precede their parent (a pattern's rows lie beyond its columns): sums in one
+        // ascending pass.
+        let mut subtree_work: Vec<f64> = (0..n_super)
+            .map(|s| {
+                let (cols, below) = ((begin[s + 1] - begin[s]) as f64, nnz[s] as f64);
+                cols * cols * cols / 3.0 + cols * cols * below + cols * below * below
+            })
+            .collect();
+        for d in 0..n_super {
+            if parent[d] != u32::MAX {
+                subtree_work[parent[d] as usize] += subtree_work[d];
+            }
+        }
+        let max_columns = (0..n_super).map(|s| begin[s + 1] - begin[s]).max().unwrap_or(0);
+        Self {
+            begin,
+            update_start,
+            updates,
+            child_start,
+            children,
+            roots,
+            subtree_work,
+            max_columns,
+            max_update,
+        }
+    }
+
+    fn children(&self, s: usize) -> &[u32] {
+        &self.children[self.child_start[s]..self.child_start[s + 1]]
+    }
+
+    fn updates(&self, s: usize) -> &[Update] {
+        &self.updates[self.update_start[s]..self.update_start[s + 1]]
+    }
+}
+
+/// Supernode `d`'s update of a later supernode: the rows of `d`'s pattern from `first` on reach
+/// it, the first `within` of them inside its columns.
+#[derive(Clone, Copy)]
+struct Update {
+    d: u32,
+    first: u32,
+    within: u32,
+}
+
+/// One thread's scratch: where each row of the current supernode lies in it, the update block,
+/// the dense factorisation's workspace.
+struct Scratch<T> {
+    local: Vec<usize>,
+    at: Vec<usize>,
+    update: Vec<T>,
+    stack: MemBuffer,
+}
+
+impl<T: FactorScalar> Scratch<T> {
+    fn new(n: usize, tree: &SupernodeTree) -> Self {
+        Self {
+            local: vec![usize::MAX; n],
+            at: Vec::new(),
+            update: vec![T::default(); tree.max_update],
+            stack: MemBuffer::new(StackReq::any_of(&[cholesky_in_place_scratch::<T>(
+                tree.max_columns,
+                Par::Seq,
+                Default::default(),
+            )])),
+        }
+    }
+}
+
+/// The factor's values, written by several threads: each supernode's slice by the one thread
+/// that factorises it, read by others only after it is complete.
+#[derive(Clone, Copy)]
+struct Shared<T>(*mut T, usize);
+// SAFETY: see `factorize`: disjoint writes, reads only of finished supernodes.
+unsafe impl<T> Send for Shared<T> {}
+unsafe impl<T> Sync for Shared<T> {}
+
+impl<T> Shared<T> {
+    /// The pointer (a method, so closures capture the whole `Shared`, which is `Sync`).
+    fn ptr(self) -> *mut T {
+        self.0
+    }
+}
+
+/// The lower triangle of the (already permuted) matrix in compressed columns.
+pub struct LowerColumns<'a, T> {
+    /// Column `j`'s entries are `col_ptr[j]..col_ptr[j + 1]`.
+    pub col_ptr: &'a [usize],
+    /// Their rows (those above the diagonal are skipped).
+    pub row_idx: &'a [usize],
+    /// Their values.
+    pub values: &'a [T],
+}
+
+/// `L Lᵀ = A` into `factor` (faer's supernodal layout of `symbolic`, `symbolic.len_val()`
+/// values), the subtrees of `tree` in parallel when the current pool has several threads. An
+/// error names the first pivot found not positive.
+pub fn factorize<T: FactorScalar>(
+    symbolic: &SymbolicSupernodalCholesky<usize>,
+    tree: &SupernodeTree,
+    a: &LowerColumns<'_, T>,
+    factor: &mut [T],
+) -> Result<(), String> {
+    assert_eq!(factor.len(), symbolic.len_val(), "factor sized for its analysis");
+    let failure = AtomicUsize::new(usize::MAX);
+    let job = Job {
+        symbolic,
+        tree,
+        a,
+        factor: Shared(factor.as_mut_ptr(), factor.len()),
+        failure: &failure,
+    };
+    let n = symbolic.nrows();
+    tree.bottom_up(&|| Scratch::new(n, tree), &|s, scratch| job.supernode(s, scratch));
+    match failure.into_inner() {
+        usize::MAX => Ok(()),
+        index => Err(format!("NonPositivePivot {{ index: {index} }}")),
+    }
+}
+
+/// A factorisation's data, shared by the threads.
+struct Job<'a, T> {
+    symbolic: &'a SymbolicSupernodalCholesky<usize>,
+    tree: &'a SupernodeTree,
+    a: &'a LowerColumns<'a, T>,
+    factor: Shared<T>,
+    /// The first column found with a pivot not positive (`usize::MAX`: none yet).
+    failure: &'a AtomicUsize,
+}
+
+impl SupernodeTree {
+    /// `f` on every supernode once all below it are done; the subtrees in parallel when the
+    /// current pool has several threads, each task with a scratch of `scratch` (reused).
+    fn bottom_up<S: Send>(&self, scratch: &(impl Fn() -> S + Sync), f: &(impl Fn(usize, &mut S) + Sync)) {
+        let pool = Mutex::new(Vec::new());
+        let parallel = rayon::current_num_threads() > 1;
+        let walk = Walk {
+            tree: self,
+            pool: &pool,
+            scratch,
+            f,
+            parallel,
+        };
+        if parallel {
+            self.roots.par_iter().for_each(|&s| walk.up(s as usize));
+        } else {
+            self.roots.iter().for_each(|&s| walk.up(s as usize));
+        }
+    }
+}
+
+/// A bottom-up traversal's state.
+struct Walk<'a, S, M, F> {
+    tree: &'a SupernodeTree,
+    pool: &'a Mutex<Vec<S>>,
+    scratch: &'a M,
+    f: &'a F,
+    parallel: bool,
+}
+
+impl<S: Send, M: Fn() -> S + Sync, F: Fn(usize, &mut S) + Sync> Walk<'_, S, M, F> {
+    /// The subtree of `s`: a chain of single children walked down first (no recursion per
+    /// supernode), the subtrees below it (in parallel when heavy), then the chain bottom-up.
+    fn up(&self, s: usize) {
+        let tree = self.tree;
+        let scratch = if !self.parallel || tree.subtree_work[s] < FORK_ABOVE_WORK {
+            let mut scratch = self.take();
+            self.sequential(s, &mut scratch);
+            scratch
+        } else {
+            let mut chain = vec![s];
+            let mut bottom = s;
+            while let [only] = tree.children(bottom) {
+                bottom = *only as usize;
+                chain.push(bottom);
+            }
+            tree.children(bottom).par_iter().for_each(|&c| self.up(c as usize));
+            let mut scratch = self.take();
+            for &t in chain.iter().rev() {
+                (self.f)(t, &mut scratch);
+            }
+            scratch
+        };
+        self.pool.lock().unwrap_or_else(|e| e.into_inner()).push(scratch);
+    }
+
+    /// The subtree of `s` on this thread, in postorder.
+    fn sequential(&self, s: usize, scratch: &mut S) {
+        // Depth-first: (supernode, next child to visit).
+        let mut stack = vec![(s, 0usize)];
+        while let Some(&mut (t, ref mut next)) = stack.last_mut() {
+            let children = self.tree.children(t);
+            if *next < children.len() {
+                let c = children[*next] as usize;
+                *next += 1;
+                stack.push((c, 0));
+            } else {
+                (self.f)(t, scratch);
+                stack.pop();
+            }
+        }
+    }
+
+    fn take(&self) -> S {
+        let pooled = self.pool.lock().unwrap_or_else(|e| e.into_inner()).pop();
+        pooled.unwrap_or_else(self.scratch)
+    }
+}
+
+impl<T: FactorScalar> Job<'_, T> {
+    /// Factorise supernode `s` (every supernode below it is done).
+    fn supernode(&self, s: usize, scratch: &mut Scratch<T>) {
+        if self.failure.load(Ordering::Relaxed) != usize::MAX {
+            // The factorisation has failed: nothing computed from here on is read.
+            return;
+        }
+        let sym = self.symbolic;
+        let begin = &self.tree.begin;
+        let (row_ptr, rows, nnz, val_ptr) = (
+            sym.col_ptr_for_row_idx(),
+            sym.row_idx(),
+            sym.nnz_per_super(),
+            sym.col_ptr_for_val(),
+        );
+        let (start, end) = (begin[s], begin[s + 1]);
+        let cols = end - start;
+        let pattern = &rows[row_ptr[s]..row_ptr[s] + nnz[s]];
+        let n_rows = cols + pattern.len();
+        // SAFETY: supernode `s`'s values are written only here, by this thread; the updating
+        // supernodes read below are in `s`'s subtree, finished before it started.
+        let ls: &mut [T] = unsafe {
+            assert!(val_ptr[s + 1] <= self.factor.1);
+            std::slice::from_raw_parts_mut(self.factor.ptr().add(val_ptr[s]), val_ptr[s + 1] - val_ptr[s])
+        };
+        debug_assert_eq!(ls.len(), n_rows * cols);
+        ls.fill(T::default());
+        let local = &mut scratch.local;
+        for (i, &row) in pattern.iter().enumerate() {
+            local[row] = cols + i;
+        }
+        for (jj, j) in (start..end).enumerate() {
+            let column = &mut ls[jj * n_rows..(jj + 1) * n_rows];
+            for k in self.a.col_ptr[j]..self.a.col_ptr[j + 1] {
+                let i = self.a.row_idx[k];
+                if i < j {
+                    continue;
+                }
+                let r = if i < end { i - start } else { local[i] };
+                column[r] += self.a.values[k];
+            }
+        }
+        for update in self.tree.updates(s) {
+            let d = update.d as usize;
+            let d_cols = begin[d + 1] - begin[d];
+            let d_pattern = &rows[row_ptr[d]..row_ptr[d] + nnz[d]];
+            let d_rows = d_cols + d_pattern.len();
+            // SAFETY: `d` is finished (below `s` in the tree) and not written any more.
+            let ld: &[T] =
+                unsafe { std::slice::from_raw_parts(self.factor.ptr().add(val_ptr[d]), val_ptr[d + 1] - val_ptr[d]) };
+            let (first, within) = (update.first as usize, update.within as usize);
+            let reach = &d_pattern[first..];
+            let below = reach.len();
+            let ld = MatRef::from_column_major_slice(ld, d_rows, d_cols);
+            let lower = ld.subrows(d_cols + first, below);
+            let upper = ld.subrows(d_cols + first, within);
+            let w = &mut scratch.update[..below * within];
+            matmul_into(w, below, within, lower, upper);
+            // Where each reached row lies in `s`: inside its columns, then in its pattern.
+            let at = &mut scratch.at;
+            at.clear();
+            at.extend(reach[..within].iter().map(|&row| row - start));
+            at.extend(reach[within..].iter().map(|&row| local[row]));
+            // Subtract the lower part: column c of the update is column `at[c]` of `s`, its
+            // rows from the same index on.
+            for c in 0..within {
+                let column = &mut ls[at[c] * n_rows..(at[c] + 1) * n_rows];
+                let wc = &w[c * below..(c + 1) * below];
+                for (&i, &v) in at[c..].iter().zip(&wc[c..]) {
+                    column[i] -= v;
+                }
+            }
+        }
+        for &row in pattern {
+            local[row] = usize::MAX;
+        }
+        let (mut top, mut bottom) = MatMut::from_column_major_slice_mut(ls, n_rows, cols).split_at_row_mut(cols);
+        let stack = MemStack::new(&mut scratch.stack);
+        if let Err(LltError::NonPositivePivot { index }) =
+            cholesky_in_place(top.rb_mut(), Default::default(), Par::Seq, stack, Default::default())
+        {
+            self.failure.fetch_min(start + index, Ordering::Relaxed);
+            return;
+        }
+        // L₂₁ L₁₁ᵀ = A₂₁, i.e. L₁₁ L₂₁ᵀ = A₂₁ᵀ.
+        faer::linalg::triangular_solve::solve_lower_triangular_in_place(
+            top.rb(),
+            bottom.rb_mut().transpose_mut(),
+            Par::Seq,
+        );
+    }
+}
+
+/// `w = lower · upperᵀ` (`rows × cols`, column-major).
+fn matmul_into<T: FactorScalar>(w: &mut [T], rows: usize, cols: usize, lower: MatRef<'_, T>, upper: MatRef<'_, T>) {
+    let dst = MatMut::from_column_major_slice_mut(w, rows, cols);
+    faer::linalg::matmul::matmul(dst, Accum::Replace, lower, upper.transpose(), T::ONE, Par::Seq);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use faer::sparse::linalg::cholesky::{
+        factorize_symbolic_cholesky, CholeskySymbolicParams, SymbolicCholeskyRaw, SymmetricOrdering,
+    };
+    use faer::sparse::linalg::SupernodalThreshold;
+    use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
+    use faer::Side;
+
+    /// The lower triangle (compressed columns) of a 5-point Laplacian plus a mass on a
+    /// `width × height` grid, ordered as one step of nested dissection: the nodes left of the
+    /// middle column, those right of it, then the middle column (so the elimination tree has
+    /// two large subtrees).
+    fn dissected_grid(width: usize, height: usize, mass: f64) -> (SymbolicSparseColMat<usize>, Vec<f64>) {
+        let middle = width / 2;
+        let mut nodes: Vec<(usize, usize)> = Vec::new();
+        for part in 0..3 {
+            for y in 0..height {
+                for x in 0..width {
+                    let in_part = match part {
+                        0 => x < middle,
+                        1 => x > middle,
+                        _ => x == middle,
+                    };
+                    if in_part {
+                        nodes.push((x, y));
+                    }
+                }
+            }
+        }
+        let mut index = vec![0usize; width * height];
+        for (i, &(x, y)) in nodes.iter().enumerate() {
+            index[y * width + x] = i;
+        }
+        let n = nodes.len();
+        let mut columns: Vec<Vec<(usize, f64)>> = vec![Vec::new(); n];
+        for (j, &(x, y)) in nodes.iter().enumerate() {
+            columns[j].push((j, 4.0 + mass));
+            let mut neighbour = |xx: usize, yy: usize| {
+                let i = index[yy * width + xx];
+                if i > j {
+                    columns[j].push((i, -1.0));
+                }
+            };
+            if x > 0 {
+                neighbour(x - 1, y);
+            }
+            if x + 1 < width {
+                neighbour(x + 1, y);
+            }
+            if y > 0 {
+                neighbour(x, y - 1);
+            }
+            if y + 1 < height {
+                neighbour(x, y + 1);
+            }
+        }
+        let (mut col_ptr, mut row_idx, mut values) = (vec![0], Vec::new(), Vec::new());
+        for column in &mut columns {
+            column.sort_by_key(|e| e.0);
+            row_idx.extend(column.iter().map(|e| e.0));
+            values.extend(column.iter().map(|e| e.1));
+            col_ptr.push(row_idx.len());
+        }
+        (SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx), values)
+    }
+
+    /// faer's supernodal analysis of the lower `pattern` in its own order (faer reads the upper
+    /// triangle when no ordering is asked for: the pattern's transpose).
+    fn analyse(pattern: &SymbolicSparseColMat<usize>) -> faer::sparse::linalg::cholesky::SymbolicCholesky<usize> {
+        let n = pattern.ncols();
+        let mut upper: Vec<Vec<usize>> = vec![Vec::new(); n];
+        for j in 0..n {
+            for i in pattern.row_idx_of_col(j) {
+                upper[i].push(j);
+            }
+        }
+        let (mut col_ptr, mut row_idx) = (vec![0], Vec::new());
+        for column in &upper {
+            row_idx.extend_from_slice(column);
+            col_ptr.push(row_idx.len());
+        }
+        let upper = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
+        let params = CholeskySymbolicParams {
+            supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
+            ..Default::default()
+        };
+        factorize_symbolic_cholesky(upper.as_ref(), Side::Upper, SymmetricOrdering::Identity, params).unwrap()
+    }
+
+    fn ours(
+        threads: usize,
+        symbolic: &SymbolicSupernodalCholesky<usize>,
+        pattern: &SymbolicSparseColMat<usize>,
+        values: &[f64],
+    ) -> Result<Vec<f64>, String> {
+        let tree = SupernodeTree::new(symbolic);
+        let lower = LowerColumns {
+            col_ptr: pattern.col_ptr(),
+            row_idx: pattern.row_idx(),
+            values,
+        };
+        let mut factor = vec![0.0; symbolic.len_val()];
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(|| factorize(symbolic, &tree, &lower, &mut factor))?;
+        Ok(factor)
+    }
+
+    /// The factor equals faer's own supernodal factorisation to rounding, and is bit-identical
+    /// at one and at two threads (the two halves of the grid then run side by side).
+    #[test]
+    fn the_factor_is_faers_and_independent_of_the_thread_count() {
+        let (pattern, values) = dissected_grid(41, 40, 0.01);
+        let analysis = analyse(&pattern);
+        let SymbolicCholeskyRaw::Supernodal(symbolic) = analysis.raw() else {
+            panic!("a supernodal analysis was forced");
+        };
+        let tree = SupernodeTree::new(symbolic);
+        assert!(tree.roots.len() == 1 && tree.subtree_work[tree.roots[0] as usize] > 10.0 * FORK_ABOVE_WORK);
+        let one = ours(1, symbolic, &pattern, &values).unwrap();
+        let two = ours(2, symbolic, &pattern, &values).unwrap();
+        assert!(one.iter().zip(&two).all(|(a, b)| a.to_bits() == b.to_bits()));
+        let mut reference = vec![0.0; analysis.len_val()];
+        let req = analysis.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default());
+        let mut buffer = MemBuffer::new(req);
+        analysis
+            .factorize_numeric_llt(
+                &mut reference,
+                SparseColMatRef::new(pattern.as_ref(), &values),
+                Side::Lower,
+                Default::default(),
+                Par::Seq,
+                MemStack::new(&mut buffer),
+                Default::default(),
+            )
+            .unwrap();
+        let largest = reference.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let worst = one
+            .iter()
+            .zip(&reference)
+            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        assert!(worst <= 1e-13 * largest, "largest difference {worst:e} of {largest:e}");
+    }
+
+    /// A matrix that is not positive definite fails, at any thread count.
+    #[test]
+    fn an_indefinite_matrix_fails() {
+        let (pattern, mut values) = dissected_grid(21, 20, 0.01);
+        // The middle column's first diagonal entry made negative: the pivot fails there.
+        let last = pattern.ncols() - 20;
+        values[pattern.col_ptr()[last]] = -1.0;
+        let analysis = analyse(&pattern);
+        let SymbolicCholeskyRaw::Supernodal(symbolic) = analysis.raw() else {
+            panic!("a supernodal analysis was forced");
+        };
+        for threads in [1, 2] {
+            let error = ours(threads, symbolic, &pattern, &values).unwrap_err();
+            assert!(error.contains("NonPositivePivot"), "{error}");
+        }
+    }
+}
