@@ -1,4 +1,6 @@
-//! Sparse Cholesky (faer `LLᵀ`), with the symbolic analysis (ordering, elimination tree) reused
+//! Sparse Cholesky `LLᵀ` (faer's symbolic analysis and solves; the numeric factorisation of a
+//! supernodal analysis our own, its elimination subtrees on several threads: [`supernodal`]),
+//! with the symbolic analysis (ordering, elimination tree) reused
 //! while the sparsity pattern is unchanged, the ordering reused within a time step when it
 //! changes, the matrix gathered already permuted (faer would permute it at every factorisation),
 //! and the factor's values and the workspace kept between factorisations (a fresh allocation of
