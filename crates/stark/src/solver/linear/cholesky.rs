@@ -1,5 +1,5 @@
-//! Sparse Cholesky `LLᵀ` (faer's symbolic analysis and solves; the numeric factorisation of a
-//! supernodal analysis our own, its elimination subtrees on several threads: [`supernodal`]),
+//! Sparse Cholesky `LLᵀ` (faer's symbolic analysis; the numeric factorisation and the solves of
+//! a supernodal analysis our own, its elimination subtrees on several threads: [`supernodal`]),
 //! with the symbolic analysis (ordering, elimination tree) reused
 //! while the sparsity pattern is unchanged, the ordering reused within a time step when it
 //! changes, the matrix gathered already permuted (faer would permute it at every factorisation),
@@ -152,6 +152,8 @@ pub struct CholeskySolver {
     factor: Vec<f64>,
     /// A permuted right-hand side.
     scratch: Vec<f64>,
+    /// The solve's values passed up the elimination tree ([`supernodal::solve_in_place`]).
+    pushed: Vec<f64>,
     /// Workspace of the factorisation and the solve, the parallelism it was sized for and its
     /// size in bytes (kept across analyses while large enough: a fresh allocation of tens of MB
     /// costs page faults).
@@ -193,6 +195,8 @@ struct SingleFactor {
     factor: Vec<f32>,
     /// A scaled, permuted right-hand side.
     rhs: Vec<f32>,
+    /// The solve's values passed up the elimination tree.
+    pushed: Vec<f32>,
     workspace: Option<(MemBuffer, Par, usize)>,
     /// `factor` is a complete factorisation of the current analysis (and `CholeskySolver::factor`
     /// is not).
@@ -310,6 +314,7 @@ impl CholeskySolver {
         factor: &[f64],
         z: &mut [f64],
         scratch: &mut Vec<f64>,
+        pushed: &mut Vec<f64>,
         par: Par,
         buffer: &mut MemBuffer,
     ) {
@@ -317,12 +322,12 @@ impl CholeskySolver {
             Some(forward) => {
                 scratch.clear();
                 scratch.extend(forward.iter().map(|&old| z[old]));
-                solve_factor(an, factor, scratch, par, buffer);
+                solve_factor(an, factor, scratch, pushed, par, buffer);
                 for (&old, &y) in forward.iter().zip(scratch.iter()) {
                     z[old] = y;
                 }
             }
-            None => solve_factor(an, factor, z, par, buffer),
+            None => solve_factor(an, factor, z, pushed, par, buffer),
         }
     }
 
@@ -346,7 +351,7 @@ impl CholeskySolver {
             return false;
         }
         z.copy_from_slice(r);
-        Self::solve_with_factor(an, &self.factor, z, &mut self.scratch, *par, buffer);
+        Self::solve_with_factor(an, &self.factor, z, &mut self.scratch, &mut self.pushed, *par, buffer);
         true
     }
 
@@ -442,13 +447,24 @@ impl CholeskySolver {
             .map_err(CholeskyError::NotPositiveDefinite)?;
         self.factored = true;
         x.copy_from_slice(b);
-        Self::solve_with_factor(an, &self.factor, x, &mut self.scratch, par, buffer);
+        Self::solve_with_factor(an, &self.factor, x, &mut self.scratch, &mut self.pushed, par, buffer);
         Ok(())
     }
 }
 
 /// `x ← (L Lᵀ)⁻¹ x` with `an`'s factor (in the analysis' order).
-fn solve_factor<T: FactorScalar>(an: &Analysis, factor: &[T], x: &mut [T], par: Par, buffer: &mut MemBuffer) {
+fn solve_factor<T: FactorScalar + std::ops::Mul<Output = T> + std::ops::Div<Output = T>>(
+    an: &Analysis,
+    factor: &[T],
+    x: &mut [T],
+    pushed: &mut Vec<T>,
+    par: Par,
+    buffer: &mut MemBuffer,
+) {
+    if let (Some(tree), SymbolicCholeskyRaw::Supernodal(supernodal)) = (&an.tree, an.symbolic_llt.raw()) {
+        supernodal::solve_in_place(supernodal, tree, factor, x, pushed);
+        return;
+    }
     let n = x.len();
     LltRef::new(&an.symbolic_llt, factor).solve_in_place_with_conj(
         Conj::No,
@@ -542,7 +558,7 @@ impl SingleFactor {
             None => self.rhs.extend(r.iter().zip(&self.scale).map(|(v, s)| (v * s) as f32)),
         }
         let (buffer, par, _) = self.workspace.as_mut().expect("workspace of the factorisation");
-        solve_factor(an, &self.factor, &mut self.rhs, *par, buffer);
+        solve_factor(an, &self.factor, &mut self.rhs, &mut self.pushed, *par, buffer);
         match &an.forward {
             Some(forward) => {
                 for ((&old, &y), s) in forward.iter().zip(&self.rhs).zip(&self.scale) {
