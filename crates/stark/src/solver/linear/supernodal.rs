@@ -392,25 +392,16 @@ impl SupernodeTree {
     /// `f` on every supernode once all below it are done; the subtrees in parallel when the
     /// current pool has several threads, each task with a scratch of `scratch` (reused).
     fn bottom_up<S: Send>(&self, scratch: &(impl Fn() -> S + Sync), f: &(impl Fn(usize, &mut S) + Sync)) {
-        let pool = Mutex::new(Vec::new());
-        let parallel = rayon::current_num_threads() > 1;
-        let walk = Walk {
-            tree: self,
-            pool: &pool,
-            scratch,
-            f,
-            parallel,
-        };
-        if parallel {
-            self.roots.par_iter().for_each(|&s| walk.up(s as usize));
-        } else {
-            self.roots.iter().for_each(|&s| walk.up(s as usize));
-        }
+        self.traverse(true, scratch, f);
     }
 
     /// `f` on every supernode once all above it are done (parents before children), as
     /// [`SupernodeTree::bottom_up`].
     fn top_down<S: Send>(&self, scratch: &(impl Fn() -> S + Sync), f: &(impl Fn(usize, &mut S) + Sync)) {
+        self.traverse(false, scratch, f);
+    }
+
+    fn traverse<S: Send>(&self, upward: bool, scratch: &(impl Fn() -> S + Sync), f: &(impl Fn(usize, &mut S) + Sync)) {
         let pool = Mutex::new(Vec::new());
         let parallel = rayon::current_num_threads() > 1;
         let walk = Walk {
@@ -420,10 +411,17 @@ impl SupernodeTree {
             f,
             parallel,
         };
+        let visit = |&s: &u32| {
+            if upward {
+                walk.up(s as usize)
+            } else {
+                walk.down(s as usize)
+            }
+        };
         if parallel {
-            self.roots.par_iter().for_each(|&s| walk.down(s as usize));
+            self.roots.par_iter().for_each(visit);
         } else {
-            self.roots.iter().for_each(|&s| walk.down(s as usize));
+            self.roots.iter().for_each(visit);
         }
     }
 }
