@@ -15,7 +15,7 @@
 
 use super::block_sparse::BlockSparseMatrix;
 use super::pcg;
-use super::supernodal::{self, FactorScalar, LowerColumns, SupernodeTree};
+use super::supernodal::{self, FactorScalar, FactorScratch, LowerColumns, SupernodeTree};
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky, LltRef, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
@@ -154,6 +154,8 @@ pub struct CholeskySolver {
     scratch: Vec<f64>,
     /// The solve's values passed up the elimination tree ([`supernodal::solve_in_place`]).
     pushed: Vec<f64>,
+    /// The factorisation's per-task scratch.
+    factor_scratch: FactorScratch<f64>,
     /// Workspace of the factorisation and the solve, the parallelism it was sized for and its
     /// size in bytes (kept across analyses while large enough: a fresh allocation of tens of MB
     /// costs page faults).
@@ -197,6 +199,7 @@ struct SingleFactor {
     rhs: Vec<f32>,
     /// The solve's values passed up the elimination tree.
     pushed: Vec<f32>,
+    factor_scratch: FactorScratch<f32>,
     workspace: Option<(MemBuffer, Par, usize)>,
     /// `factor` is a complete factorisation of the current analysis (and `CholeskySolver::factor`
     /// is not).
@@ -443,8 +446,15 @@ impl CholeskySolver {
             }
             self.single_precision_fallbacks += 1;
         }
-        let buffer = factorise_numeric(an, &self.values, &mut self.factor, &mut self.workspace, par)
-            .map_err(CholeskyError::NotPositiveDefinite)?;
+        let buffer = factorise_numeric(
+            an,
+            &self.values,
+            &mut self.factor,
+            &mut self.factor_scratch,
+            &mut self.workspace,
+            par,
+        )
+        .map_err(CholeskyError::NotPositiveDefinite)?;
         self.factored = true;
         x.copy_from_slice(b);
         Self::solve_with_factor(an, &self.factor, x, &mut self.scratch, &mut self.pushed, par, buffer);
@@ -480,6 +490,7 @@ fn factorise_numeric<'w, T: FactorScalar>(
     an: &Analysis,
     values: &[T],
     factor: &mut Vec<T>,
+    scratch: &mut FactorScratch<T>,
     slot: &'w mut Option<(MemBuffer, Par, usize)>,
     par: Par,
 ) -> Result<&'w mut MemBuffer, String> {
@@ -497,7 +508,7 @@ fn factorise_numeric<'w, T: FactorScalar>(
             row_idx: m.row_idx(),
             values,
         };
-        supernodal::factorize(supernodal, tree, &lower, factor)?;
+        supernodal::factorize(supernodal, tree, &lower, factor, scratch)?;
         return Ok(buffer);
     }
     symbolic
@@ -542,8 +553,15 @@ impl SingleFactor {
             self.values
                 .extend((col_ptr[j]..col_ptr[j + 1]).map(|k| (values[k] * self.scale[row_idx[k]] * sj) as f32));
         }
-        factorise_numeric(an, &self.values, &mut self.factor, &mut self.workspace, par)
-            .map_err(|e| CholeskyError::NotPositiveDefinite(format!("single precision: {e}")))?;
+        factorise_numeric(
+            an,
+            &self.values,
+            &mut self.factor,
+            &mut self.factor_scratch,
+            &mut self.workspace,
+            par,
+        )
+        .map_err(|e| CholeskyError::NotPositiveDefinite(format!("single precision: {e}")))?;
         self.factored = true;
         Ok(())
     }

@@ -191,20 +191,50 @@ struct Scratch<T> {
     at: Vec<usize>,
     update: Vec<T>,
     stack: MemBuffer,
+    /// The largest diagonal block `stack` is sized for.
+    stack_columns: usize,
 }
 
 impl<T: FactorScalar> Scratch<T> {
     fn new(n: usize, tree: &SupernodeTree) -> Self {
-        Self {
-            local: vec![usize::MAX; n],
+        let mut scratch = Self {
+            local: Vec::new(),
             at: Vec::new(),
-            update: vec![T::default(); tree.max_update],
-            stack: MemBuffer::new(StackReq::any_of(&[cholesky_in_place_scratch::<T>(
+            update: Vec::new(),
+            stack: MemBuffer::new(StackReq::EMPTY),
+            stack_columns: 0,
+        };
+        scratch.fit(n, tree);
+        scratch
+    }
+
+    /// Sized for a matrix of `n` unknowns and `tree` (`local` is all `usize::MAX` between
+    /// supernodes: each resets the entries it set).
+    fn fit(&mut self, n: usize, tree: &SupernodeTree) {
+        self.local.resize(n, usize::MAX);
+        if self.update.len() < tree.max_update {
+            self.update.resize(tree.max_update, T::default());
+        }
+        if self.stack_columns < tree.max_columns {
+            self.stack = MemBuffer::new(cholesky_in_place_scratch::<T>(
                 tree.max_columns,
                 Par::Seq,
                 Default::default(),
-            )])),
+            ));
+            self.stack_columns = tree.max_columns;
         }
+    }
+}
+
+/// The factorisation's per-task scratch, kept between factorisations (a towel's is a few MB per
+/// task: allocated and zeroed at every factorisation otherwise).
+pub struct FactorScratch<T> {
+    pool: Vec<Scratch<T>>,
+}
+
+impl<T> Default for FactorScratch<T> {
+    fn default() -> Self {
+        Self { pool: Vec::new() }
     }
 }
 
@@ -242,8 +272,13 @@ pub fn factorize<T: FactorScalar>(
     tree: &SupernodeTree,
     a: &LowerColumns<'_, T>,
     factor: &mut [T],
+    scratch: &mut FactorScratch<T>,
 ) -> Result<(), String> {
     assert_eq!(factor.len(), symbolic.len_val(), "factor sized for its analysis");
+    let n = symbolic.nrows();
+    for kept in &mut scratch.pool {
+        kept.fit(n, tree);
+    }
     let failure = AtomicUsize::new(usize::MAX);
     let job = Job {
         symbolic,
@@ -252,8 +287,11 @@ pub fn factorize<T: FactorScalar>(
         factor: Shared(factor.as_mut_ptr(), factor.len()),
         failure: &failure,
     };
-    let n = symbolic.nrows();
-    tree.bottom_up(&|| Scratch::new(n, tree), &|s, scratch| job.supernode(s, scratch));
+    let pool = Mutex::new(std::mem::take(&mut scratch.pool));
+    tree.bottom_up(&pool, &|| Scratch::new(n, tree), &|s, scratch| {
+        job.supernode(s, scratch)
+    });
+    scratch.pool = pool.into_inner().unwrap_or_else(|e| e.into_inner());
     match failure.into_inner() {
         usize::MAX => Ok(()),
         index => Err(format!("NonPositivePivot {{ index: {index} }}")),
@@ -294,7 +332,7 @@ pub fn solve_in_place<T: FactorScalar + std::ops::Mul<Output = T> + std::ops::Di
     // SAFETY (both passes): supernode `s` writes only its own entries of `x` and of `pushed`
     // and reads only those of supernodes finished before it (below it going up, above it going
     // down); the slices are within `x` and `pushed` (the analysis' sizes, asserted above).
-    tree.bottom_up(&|| (), &|s, _| {
+    tree.bottom_up(&Mutex::new(Vec::new()), &|| (), &|s, _| {
         let (start, cols, l, n_rows) = block(s);
         let xs = unsafe { std::slice::from_raw_parts_mut(x_shared.ptr().add(start), cols) };
         for update in tree.updates(s) {
@@ -333,7 +371,7 @@ pub fn solve_in_place<T: FactorScalar + std::ops::Mul<Output = T> + std::ops::Di
             }
         }
     });
-    tree.top_down(&Vec::new, &|s, gathered: &mut Vec<T>| {
+    tree.top_down(&Mutex::new(Vec::new()), &Vec::new, &|s, gathered: &mut Vec<T>| {
         let (start, cols, l, n_rows) = block(s);
         let pattern = &rows[row_ptr[s]..row_ptr[s] + nnz[s]];
         gathered.clear();
@@ -390,23 +428,39 @@ struct Job<'a, T> {
 
 impl SupernodeTree {
     /// `f` on every supernode once all below it are done; the subtrees in parallel when the
-    /// current pool has several threads, each task with a scratch of `scratch` (reused).
-    fn bottom_up<S: Send>(&self, scratch: &(impl Fn() -> S + Sync), f: &(impl Fn(usize, &mut S) + Sync)) {
-        self.traverse(true, scratch, f);
+    /// current pool has several threads, each task with a scratch from `pool` (or made by
+    /// `scratch`; all returned to `pool`).
+    fn bottom_up<S: Send>(
+        &self,
+        pool: &Mutex<Vec<S>>,
+        scratch: &(impl Fn() -> S + Sync),
+        f: &(impl Fn(usize, &mut S) + Sync),
+    ) {
+        self.traverse(true, pool, scratch, f);
     }
 
     /// `f` on every supernode once all above it are done (parents before children), as
     /// [`SupernodeTree::bottom_up`].
-    fn top_down<S: Send>(&self, scratch: &(impl Fn() -> S + Sync), f: &(impl Fn(usize, &mut S) + Sync)) {
-        self.traverse(false, scratch, f);
+    fn top_down<S: Send>(
+        &self,
+        pool: &Mutex<Vec<S>>,
+        scratch: &(impl Fn() -> S + Sync),
+        f: &(impl Fn(usize, &mut S) + Sync),
+    ) {
+        self.traverse(false, pool, scratch, f);
     }
 
-    fn traverse<S: Send>(&self, upward: bool, scratch: &(impl Fn() -> S + Sync), f: &(impl Fn(usize, &mut S) + Sync)) {
-        let pool = Mutex::new(Vec::new());
+    fn traverse<S: Send>(
+        &self,
+        upward: bool,
+        pool: &Mutex<Vec<S>>,
+        scratch: &(impl Fn() -> S + Sync),
+        f: &(impl Fn(usize, &mut S) + Sync),
+    ) {
         let parallel = rayon::current_num_threads() > 1;
         let walk = Walk {
             tree: self,
-            pool: &pool,
+            pool,
             scratch,
             f,
             parallel,
@@ -426,7 +480,7 @@ impl SupernodeTree {
     }
 }
 
-/// A bottom-up traversal's state.
+/// A traversal's state (either direction).
 struct Walk<'a, S, M, F> {
     tree: &'a SupernodeTree,
     pool: &'a Mutex<Vec<S>>,
@@ -714,7 +768,12 @@ mod tests {
         };
         let mut factor = vec![0.0; symbolic.len_val()];
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-        pool.install(|| factorize(symbolic, &tree, &lower, &mut factor))?;
+        let mut scratch = FactorScratch::default();
+        pool.install(|| factorize(symbolic, &tree, &lower, &mut factor, &mut scratch))?;
+        // Again with the kept scratch: the same factor.
+        let mut again = vec![0.0; factor.len()];
+        pool.install(|| factorize(symbolic, &tree, &lower, &mut again, &mut scratch))?;
+        assert!(again.iter().zip(&factor).all(|(a, b)| a.to_bits() == b.to_bits()));
         Ok(factor)
     }
 
