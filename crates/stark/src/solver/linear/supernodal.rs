@@ -9,8 +9,10 @@
 //! factorised *left-looking* — its columns gathered from the matrix, then the updates of the
 //! supernodes below it that reach its rows subtracted in ascending order, then a dense Cholesky
 //! of its diagonal block and a triangular solve for the rows below — by one thread, once all of
-//! its subtree is done. Each supernode's arithmetic is the same whichever thread runs it and
-//! whatever ran beside it, so the factor is bit-identical at any thread count.
+//! its subtree is done. The top separators, whose hundreds of updates no subtree shares, are
+//! gathered and updated in column blocks of a fixed width, the blocks in parallel. Each
+//! supernode's arithmetic is the same whichever thread runs it and whatever ran beside it, so
+//! the factor is bit-identical at any thread count.
 //!
 //! The triangular solves walk the same tree ([`solve_in_place`]): up, each supernode takes what
 //! the supernodes below it left for its rows, solves with its diagonal block and leaves its
@@ -34,6 +36,13 @@ use std::sync::Mutex;
 /// A subtree with less work than this (multiply-adds, estimated) is factorised on the thread
 /// that reached it: forking costs more than it saves.
 const FORK_ABOVE_WORK: f64 = 2.0e5;
+
+/// Supernodes of at least this many columns are gathered and updated in blocks of
+/// `BLOCK_COLUMNS` columns, in parallel: the top separators of a folded towel's factor (up to
+/// ~1000 columns, ~400 updates) took a third of the factorisation's time at two threads with
+/// one thread idle. The blocks are fixed, so the arithmetic does not depend on the thread count.
+const SPLIT_FROM_COLUMNS: usize = 2 * BLOCK_COLUMNS;
+const BLOCK_COLUMNS: usize = 64;
 
 /// The scalars the factor is computed in (single or double precision).
 pub trait FactorScalar:
@@ -226,15 +235,26 @@ impl<T: FactorScalar> Scratch<T> {
     }
 }
 
+/// A column block's scratch (see `SPLIT_FROM_COLUMNS`): the update's row positions and block.
+#[derive(Default)]
+struct BlockScratch<T> {
+    at: Vec<usize>,
+    update: Vec<T>,
+}
+
 /// The factorisation's per-task scratch, kept between factorisations (a towel's is a few MB per
 /// task: allocated and zeroed at every factorisation otherwise).
 pub struct FactorScratch<T> {
     pool: Vec<Scratch<T>>,
+    blocks: Vec<BlockScratch<T>>,
 }
 
 impl<T> Default for FactorScratch<T> {
     fn default() -> Self {
-        Self { pool: Vec::new() }
+        Self {
+            pool: Vec::new(),
+            blocks: Vec::new(),
+        }
     }
 }
 
@@ -280,18 +300,21 @@ pub fn factorize<T: FactorScalar>(
         kept.fit(n, tree);
     }
     let failure = AtomicUsize::new(usize::MAX);
+    let block_pool = Mutex::new(std::mem::take(&mut scratch.blocks));
     let job = Job {
         symbolic,
         tree,
         a,
         factor: Shared(factor.as_mut_ptr(), factor.len()),
         failure: &failure,
+        block_pool: &block_pool,
     };
     let pool = Mutex::new(std::mem::take(&mut scratch.pool));
     tree.bottom_up(&pool, &|| Scratch::new(n, tree), &|s, scratch| {
         job.supernode(s, scratch)
     });
     scratch.pool = pool.into_inner().unwrap_or_else(|e| e.into_inner());
+    scratch.blocks = block_pool.into_inner().unwrap_or_else(|e| e.into_inner());
     match failure.into_inner() {
         usize::MAX => Ok(()),
         index => Err(format!("NonPositivePivot {{ index: {index} }}")),
@@ -424,6 +447,8 @@ struct Job<'a, T> {
     factor: Shared<T>,
     /// The first column found with a pivot not positive (`usize::MAX`: none yet).
     failure: &'a AtomicUsize,
+    /// The column blocks' scratch.
+    block_pool: &'a Mutex<Vec<BlockScratch<T>>>,
 }
 
 impl SupernodeTree {
@@ -590,53 +615,43 @@ impl<T: FactorScalar> Job<'_, T> {
             std::slice::from_raw_parts_mut(self.factor.ptr().add(val_ptr[s]), val_ptr[s + 1] - val_ptr[s])
         };
         debug_assert_eq!(ls.len(), n_rows * cols);
-        ls.fill(T::default());
         let local = &mut scratch.local;
         for (i, &row) in pattern.iter().enumerate() {
             local[row] = cols + i;
         }
-        for (jj, j) in (start..end).enumerate() {
-            let column = &mut ls[jj * n_rows..(jj + 1) * n_rows];
-            for k in self.a.col_ptr[j]..self.a.col_ptr[j + 1] {
-                let i = self.a.row_idx[k];
-                if i < j {
-                    continue;
-                }
-                let r = if i < end { i - start } else { local[i] };
-                column[r] += self.a.values[k];
+        if cols >= SPLIT_FROM_COLUMNS {
+            // Column blocks of a fixed width, each gathered and updated on its own (in parallel
+            // when the pool has several threads): the same arithmetic at any thread count.
+            let local: &[usize] = local;
+            let each = |(b, columns): (usize, &mut [T]), block: &mut BlockScratch<T>| {
+                let c0 = b * BLOCK_COLUMNS;
+                self.gather_and_update(s, c0, columns, local, &mut block.at, &mut block.update);
+            };
+            if rayon::current_num_threads() > 1 {
+                ls.par_chunks_mut(BLOCK_COLUMNS * n_rows).enumerate().for_each(|item| {
+                    let mut block = self
+                        .block_pool
+                        .lock()
+                        .unwrap_or_else(|e| e.into_inner())
+                        .pop()
+                        .unwrap_or_default();
+                    each(item, &mut block);
+                    self.block_pool.lock().unwrap_or_else(|e| e.into_inner()).push(block);
+                });
+            } else {
+                let mut block = BlockScratch {
+                    at: std::mem::take(&mut scratch.at),
+                    update: std::mem::take(&mut scratch.update),
+                };
+                ls.chunks_mut(BLOCK_COLUMNS * n_rows)
+                    .enumerate()
+                    .for_each(|item| each(item, &mut block));
+                (scratch.at, scratch.update) = (block.at, block.update);
             }
+        } else {
+            self.gather_and_update(s, 0, ls, local, &mut scratch.at, &mut scratch.update);
         }
-        for update in self.tree.updates(s) {
-            let d = update.d as usize;
-            let d_cols = begin[d + 1] - begin[d];
-            let d_pattern = &rows[row_ptr[d]..row_ptr[d] + nnz[d]];
-            let d_rows = d_cols + d_pattern.len();
-            // SAFETY: `d` is finished (below `s` in the tree) and not written any more.
-            let ld: &[T] =
-                unsafe { std::slice::from_raw_parts(self.factor.ptr().add(val_ptr[d]), val_ptr[d + 1] - val_ptr[d]) };
-            let (first, within) = (update.first as usize, update.within as usize);
-            let reach = &d_pattern[first..];
-            let below = reach.len();
-            let ld = MatRef::from_column_major_slice(ld, d_rows, d_cols);
-            let lower = ld.subrows(d_cols + first, below);
-            let upper = ld.subrows(d_cols + first, within);
-            let w = &mut scratch.update[..below * within];
-            matmul_into(w, below, within, lower, upper);
-            // Where each reached row lies in `s`: inside its columns, then in its pattern.
-            let at = &mut scratch.at;
-            at.clear();
-            at.extend(reach[..within].iter().map(|&row| row - start));
-            at.extend(reach[within..].iter().map(|&row| local[row]));
-            // Subtract the lower part: column c of the update is column `at[c]` of `s`, its
-            // rows from the same index on.
-            for c in 0..within {
-                let column = &mut ls[at[c] * n_rows..(at[c] + 1) * n_rows];
-                let wc = &w[c * below..(c + 1) * below];
-                for (&i, &v) in at[c..].iter().zip(&wc[c..]) {
-                    column[i] -= v;
-                }
-            }
-        }
+        let local = &mut scratch.local;
         for &row in pattern {
             local[row] = usize::MAX;
         }
@@ -654,6 +669,82 @@ impl<T: FactorScalar> Job<'_, T> {
             bottom.rb_mut().transpose_mut(),
             Par::Seq,
         );
+    }
+    /// Supernode `s`'s columns from `c0` on (`columns`, whole columns of its block, zeroed
+    /// here): the matrix's entries gathered, then the updates of the supernodes below it
+    /// subtracted in ascending order. `local` places each pattern row in the block.
+    fn gather_and_update(
+        &self,
+        s: usize,
+        c0: usize,
+        columns: &mut [T],
+        local: &[usize],
+        at: &mut Vec<usize>,
+        update: &mut Vec<T>,
+    ) {
+        let sym = self.symbolic;
+        let begin = &self.tree.begin;
+        let (row_ptr, rows, nnz, val_ptr) = (
+            sym.col_ptr_for_row_idx(),
+            sym.row_idx(),
+            sym.nnz_per_super(),
+            sym.col_ptr_for_val(),
+        );
+        let (start, end) = (begin[s], begin[s + 1]);
+        let n_rows = end - start + nnz[s];
+        let c1 = c0 + columns.len() / n_rows;
+        columns.fill(T::default());
+        for (jj, j) in (start + c0..start + c1).enumerate() {
+            let column = &mut columns[jj * n_rows..(jj + 1) * n_rows];
+            for k in self.a.col_ptr[j]..self.a.col_ptr[j + 1] {
+                let i = self.a.row_idx[k];
+                if i < j {
+                    continue;
+                }
+                let r = if i < end { i - start } else { local[i] };
+                column[r] += self.a.values[k];
+            }
+        }
+        for u in self.tree.updates(s) {
+            let d = u.d as usize;
+            let d_cols = begin[d + 1] - begin[d];
+            let d_pattern = &rows[row_ptr[d]..row_ptr[d] + nnz[d]];
+            let d_rows = d_cols + d_pattern.len();
+            let (first, within) = (u.first as usize, u.within as usize);
+            let reach = &d_pattern[first..];
+            // The update's columns that fall in `c0..c1`.
+            let ca = reach[..within].partition_point(|&row| row < start + c0);
+            let cb = reach[..within].partition_point(|&row| row < start + c1);
+            if ca == cb {
+                continue;
+            }
+            let (below, width) = (reach.len() - ca, cb - ca);
+            // SAFETY: `d` is finished (below `s` in the tree) and not written any more.
+            let ld: &[T] =
+                unsafe { std::slice::from_raw_parts(self.factor.ptr().add(val_ptr[d]), val_ptr[d + 1] - val_ptr[d]) };
+            let ld = MatRef::from_column_major_slice(ld, d_rows, d_cols);
+            let lower = ld.subrows(d_cols + first + ca, below);
+            let upper = ld.subrows(d_cols + first + ca, width);
+            if update.len() < below * width {
+                update.resize(below * width, T::default());
+            }
+            let w = &mut update[..below * width];
+            matmul_into(w, below, width, lower, upper);
+            // Where each reached row lies in `s`: inside its columns, then in its pattern.
+            at.clear();
+            at.extend(reach[ca..within].iter().map(|&row| row - start));
+            at.extend(reach[within..].iter().map(|&row| local[row]));
+            // Subtract the lower part: column c of the update is column `at[c]` of `s`, its
+            // rows from the same index on.
+            for c in 0..width {
+                let target = at[c] - c0;
+                let column = &mut columns[target * n_rows..(target + 1) * n_rows];
+                let wc = &w[c * below..(c + 1) * below];
+                for (&i, &v) in at[c..].iter().zip(&wc[c..]) {
+                    column[i] -= v;
+                }
+            }
+        }
     }
 }
 
@@ -778,16 +869,21 @@ mod tests {
     }
 
     /// The factor equals faer's own supernodal factorisation to rounding, and is bit-identical
-    /// at one and at two threads (the two halves of the grid then run side by side).
+    /// at one and at two threads (the two halves of the grid then run side by side, and the
+    /// separator's column blocks).
     #[test]
     fn the_factor_is_faers_and_independent_of_the_thread_count() {
-        let (pattern, values) = dissected_grid(41, 40, 0.01);
+        let (pattern, values) = dissected_grid(15, 300, 0.01);
         let analysis = analyse(&pattern);
         let SymbolicCholeskyRaw::Supernodal(symbolic) = analysis.raw() else {
             panic!("a supernodal analysis was forced");
         };
         let tree = SupernodeTree::new(symbolic);
         assert!(tree.roots.len() == 1 && tree.subtree_work[tree.roots[0] as usize] > 10.0 * FORK_ABOVE_WORK);
+        assert!(
+            tree.max_columns >= SPLIT_FROM_COLUMNS + BLOCK_COLUMNS / 2,
+            "a separator split in blocks"
+        );
         let one = ours(1, symbolic, &pattern, &values).unwrap();
         let two = ours(2, symbolic, &pattern, &values).unwrap();
         assert!(one.iter().zip(&two).all(|(a, b)| a.to_bits() == b.to_bits()));
