@@ -30,12 +30,13 @@ impl Contact {
         );
         // Point–triangle and edge–edge pairs are one per candidate; a pair reduced to a point–point
         // or point–edge distance can come from several candidates (a vertex near a fan of
-        // triangles): those are merged into one pair whose multiplicity counts them. Only they
-        // need the sort (the candidates' order is deterministic, and so is this one).
-        let (mut merged, unique): (Vec<ContactPair>, Vec<ContactPair>) = found
-            .into_iter()
-            .partition(|p| matches!(p.kind, PairKind::PointPoint | PairKind::PointEdge));
-        merged.sort_unstable_by_key(|p| (p.kind, p.nodes));
+        // triangles, an edge's end near several edges): those are merged into one pair whose
+        // multiplicity counts them. Only they need the sort, in parallel, by a key that leaves
+        // only equal pairs in an undetermined order (a pair found from either side keeps the
+        // smaller object pair); the others follow in the candidates' order.
+        let reduced = |p: &ContactPair| matches!(p.kind, PairKind::PointPoint | PairKind::PointEdge);
+        let mut merged: Vec<ContactPair> = found.par_iter().filter(|p| reduced(p)).cloned().collect();
+        merged.par_sort_unstable_by_key(|p| (p.kind, p.nodes, p.objects));
         merged.dedup_by(|later, kept| {
             let same = later.kind == kept.kind && later.nodes == kept.nodes;
             if same {
@@ -43,7 +44,8 @@ impl Contact {
             }
             same
         });
-        merged.extend(unique);
+        merged.reserve(found.len() - merged.len());
+        merged.extend(found.into_iter().filter(|p| !reduced(p)));
         merged
     }
 

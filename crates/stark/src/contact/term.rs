@@ -6,6 +6,7 @@ use super::PairHessian;
 use crate::energy::kinematics::{
     element_blocks, map_element, write_deformable_element, write_deformable_element_in_slots, MapProjection, NodeMap,
 };
+use crate::energy::potential::deterministic_sum;
 use crate::energy::term::{element_stride, NO_DOF};
 use crate::energy::Node;
 use crate::energy::{EnergyTerm, EvalMode, HyperDual, Scalar, StepCheck, Vec3};
@@ -58,23 +59,21 @@ impl EnergyTerm for Contact {
     }
     fn energy(&self, state: &EvalState) -> f64 {
         let kind = self.settings.barrier;
-        let barrier_energy: f64 = self
-            .pairs
-            .iter()
-            .map(|p| {
-                pair_energy(
-                    p,
-                    &Self::stencil_x(&p.nodes, state.x).map(|q| Vec3::<f64>::constant(&q)),
-                    p.kappa * p.multiplicity,
-                    kind,
-                )
-            })
-            .sum();
-        let friction_energy: f64 = self
-            .friction_elements
-            .iter()
-            .map(|f| f.energy(&Self::stencil_x(&f.nodes, state.x).map(|q| Vec3::<f64>::constant(&q))))
-            .sum();
+        // In parallel, in a fixed order (the towel's 55k pairs and friction elements were the
+        // line search's one serial sweep).
+        let barrier_energy = deterministic_sum(self.pairs.len(), |i| {
+            let p = &self.pairs[i];
+            pair_energy(
+                p,
+                &Self::stencil_x(&p.nodes, state.x).map(|q| Vec3::<f64>::constant(&q)),
+                p.kappa * p.multiplicity,
+                kind,
+            )
+        });
+        let friction_energy = deterministic_sum(self.friction_elements.len(), |i| {
+            let f = &self.friction_elements[i];
+            f.energy(&Self::stencil_x(&f.nodes, state.x).map(|q| Vec3::<f64>::constant(&q)))
+        });
         barrier_energy + friction_energy
     }
     fn evaluate_element(&self, e: usize, state: &EvalState, mode: EvalMode, out: &mut [f64]) {

@@ -103,6 +103,17 @@ fn two_prescribed_triangles(lower: [Vector3<f64>; 3], upper: [Vector3<f64>; 3]) 
     sim
 }
 
+/// Two triangles whose corners face each other 0.4 mm apart: one point–point pair.
+fn facing_corners() -> Simulation {
+    let lower = [
+        Vector3::new(0.0, 0.0, 0.0),
+        Vector3::new(-1.0, 0.0, -1.0),
+        Vector3::new(0.0, -1.0, -1.0),
+    ];
+    let upper = lower.map(|p| Vector3::new(-p.x, -p.y, 4e-4 - p.z));
+    two_prescribed_triangles(lower, upper)
+}
+
 /// Newton's `use_definite_hessian` switch: on (far from the solution), a pair whose distance
 /// curves assembles a positive semi-definite Hessian; off (near it), the exact one, whose
 /// negative curvature across the pair the inertia carries.
@@ -110,14 +121,7 @@ fn two_prescribed_triangles(lower: [Vector3<f64>; 3], upper: [Vector3<f64>; 3]) 
 fn barrier_pairs_take_their_exact_hessian_when_newton_asks() {
     use crate::energy::psd::symmetric_eigen;
     use crate::energy::EvalMode;
-    // Two triangles whose corners face each other 0.4 mm apart: one point–point pair.
-    let lower = [
-        Vector3::new(0.0, 0.0, 0.0),
-        Vector3::new(-1.0, 0.0, -1.0),
-        Vector3::new(0.0, -1.0, -1.0),
-    ];
-    let upper = lower.map(|p| Vector3::new(-p.x, -p.y, 4e-4 - p.z));
-    let mut sim = two_prescribed_triangles(lower, upper);
+    let mut sim = facing_corners();
     let x = sim.nodes.x.clone();
     assert!(valid_at(&mut sim, &x));
     at_rest(&mut sim, |contact, state| {
@@ -149,6 +153,31 @@ fn barrier_pairs_take_their_exact_hessian_when_newton_asks() {
             exact.fold(f64::INFINITY, f64::min) < -1e-3,
             "exact: negative curvature across"
         );
+    });
+}
+
+/// A pair reached from several candidates is one pair counting them: two triangles whose
+/// corners face each other give the corners' point–point pair from both point–triangle
+/// candidates and from the two edge–edge candidates of non-parallel edges there (the parallel
+/// ones are mollified edge–edge pairs of their own).
+#[test]
+fn a_pair_reached_from_several_candidates_is_one_pair() {
+    use super::pairs::PairKind;
+    let mut sim = facing_corners();
+    at_rest(&mut sim, |contact, state| {
+        contact.prepare_evaluation(state);
+        let pairs = contact.pairs();
+        let mut keys: Vec<_> = pairs.iter().map(|p| (p.kind, p.nodes)).collect();
+        keys.sort();
+        keys.dedup();
+        assert_eq!(keys.len(), pairs.len(), "each pair once: {keys:?}");
+        let corners: Vec<_> = pairs.iter().filter(|p| p.kind == PairKind::PointPoint).collect();
+        assert_eq!(corners.len(), 1);
+        assert_eq!(corners[0].multiplicity, 4.0);
+        let mollified = pairs
+            .iter()
+            .filter(|p| matches!(p.kind, PairKind::EdgeEdgeMollified(_)));
+        assert_eq!(mollified.count(), 2);
     });
 }
 
