@@ -197,8 +197,7 @@ struct Update {
 /// the dense factorisation's workspace.
 struct Scratch<T> {
     local: Vec<usize>,
-    at: Vec<usize>,
-    update: Vec<T>,
+    block: BlockScratch<T>,
     stack: MemBuffer,
     /// The largest diagonal block `stack` is sized for.
     stack_columns: usize,
@@ -208,8 +207,7 @@ impl<T: FactorScalar> Scratch<T> {
     fn new(n: usize, tree: &SupernodeTree) -> Self {
         let mut scratch = Self {
             local: Vec::new(),
-            at: Vec::new(),
-            update: Vec::new(),
+            block: BlockScratch::default(),
             stack: MemBuffer::new(StackReq::EMPTY),
             stack_columns: 0,
         };
@@ -221,8 +219,8 @@ impl<T: FactorScalar> Scratch<T> {
     /// supernodes: each resets the entries it set).
     fn fit(&mut self, n: usize, tree: &SupernodeTree) {
         self.local.resize(n, usize::MAX);
-        if self.update.len() < tree.max_update {
-            self.update.resize(tree.max_update, T::default());
+        if self.block.update.len() < tree.max_update {
+            self.block.update.resize(tree.max_update, T::default());
         }
         if self.stack_columns < tree.max_columns {
             self.stack = MemBuffer::new(cholesky_in_place_scratch::<T>(
@@ -235,7 +233,8 @@ impl<T: FactorScalar> Scratch<T> {
     }
 }
 
-/// A column block's scratch (see `SPLIT_FROM_COLUMNS`): the update's row positions and block.
+/// The scratch of a supernode's updates (or of one column block's, see `SPLIT_FROM_COLUMNS`):
+/// the update's row positions and block.
 #[derive(Default)]
 struct BlockScratch<T> {
     at: Vec<usize>,
@@ -310,7 +309,7 @@ pub fn factorize<T: FactorScalar>(
         block_pool: &block_pool,
     };
     let pool = Mutex::new(std::mem::take(&mut scratch.pool));
-    tree.bottom_up(&pool, &|| Scratch::new(n, tree), &|s, scratch| {
+    tree.traverse(Direction::Up, &pool, &|| Scratch::new(n, tree), &|s, scratch| {
         job.supernode(s, scratch)
     });
     scratch.pool = pool.into_inner().unwrap_or_else(|e| e.into_inner());
@@ -355,7 +354,7 @@ pub fn solve_in_place<T: FactorScalar + std::ops::Mul<Output = T> + std::ops::Di
     // SAFETY (both passes): supernode `s` writes only its own entries of `x` and of `pushed`
     // and reads only those of supernodes finished before it (below it going up, above it going
     // down); the slices are within `x` and `pushed` (the analysis' sizes, asserted above).
-    tree.bottom_up(&Mutex::new(Vec::new()), &|| (), &|s, _| {
+    tree.traverse(Direction::Up, &Mutex::new(Vec::new()), &|| (), &|s, _| {
         let (start, cols, l, n_rows) = block(s);
         let xs = unsafe { std::slice::from_raw_parts_mut(x_shared.ptr().add(start), cols) };
         for update in tree.updates(s) {
@@ -394,18 +393,23 @@ pub fn solve_in_place<T: FactorScalar + std::ops::Mul<Output = T> + std::ops::Di
             }
         }
     });
-    tree.top_down(&Mutex::new(Vec::new()), &Vec::new, &|s, gathered: &mut Vec<T>| {
-        let (start, cols, l, n_rows) = block(s);
-        let pattern = &rows[row_ptr[s]..row_ptr[s] + nnz[s]];
-        gathered.clear();
-        gathered.extend(pattern.iter().map(|&row| unsafe { *x_shared.ptr().add(row) }));
-        let xs = unsafe { std::slice::from_raw_parts_mut(x_shared.ptr().add(start), cols) };
-        for j in (0..cols).rev() {
-            let column = &l[j * n_rows..(j + 1) * n_rows];
-            let sum = dot_lanes(&column[cols..], gathered) + dot_lanes(&column[j + 1..cols], &xs[j + 1..]);
-            xs[j] = (xs[j] - sum) / column[j];
-        }
-    });
+    tree.traverse(
+        Direction::Down,
+        &Mutex::new(Vec::new()),
+        &Vec::new,
+        &|s, gathered: &mut Vec<T>| {
+            let (start, cols, l, n_rows) = block(s);
+            let pattern = &rows[row_ptr[s]..row_ptr[s] + nnz[s]];
+            gathered.clear();
+            gathered.extend(pattern.iter().map(|&row| unsafe { *x_shared.ptr().add(row) }));
+            let xs = unsafe { std::slice::from_raw_parts_mut(x_shared.ptr().add(start), cols) };
+            for j in (0..cols).rev() {
+                let column = &l[j * n_rows..(j + 1) * n_rows];
+                let sum = dot_lanes(&column[cols..], gathered) + dot_lanes(&column[j + 1..cols], &xs[j + 1..]);
+                xs[j] = (xs[j] - sum) / column[j];
+            }
+        },
+    );
 }
 
 /// `a · b` summed in 32 lanes, then 8, then one (a fixed order, which the compiler keeps in
@@ -439,6 +443,15 @@ fn dot_lanes<T: FactorScalar + std::ops::Mul<Output = T>>(a: &[T], b: &[T]) -> T
     sum
 }
 
+/// The order of a traversal of the elimination tree.
+#[derive(Clone, Copy)]
+enum Direction {
+    /// Children before their parent.
+    Up,
+    /// Parents before their children.
+    Down,
+}
+
 /// A factorisation's data, shared by the threads.
 struct Job<'a, T> {
     symbolic: &'a SymbolicSupernodalCholesky<usize>,
@@ -452,32 +465,13 @@ struct Job<'a, T> {
 }
 
 impl SupernodeTree {
-    /// `f` on every supernode once all below it are done; the subtrees in parallel when the
-    /// current pool has several threads, each task with a scratch from `pool` (or made by
-    /// `scratch`; all returned to `pool`).
-    fn bottom_up<S: Send>(
-        &self,
-        pool: &Mutex<Vec<S>>,
-        scratch: &(impl Fn() -> S + Sync),
-        f: &(impl Fn(usize, &mut S) + Sync),
-    ) {
-        self.traverse(true, pool, scratch, f);
-    }
-
-    /// `f` on every supernode once all above it are done (parents before children), as
-    /// [`SupernodeTree::bottom_up`].
-    fn top_down<S: Send>(
-        &self,
-        pool: &Mutex<Vec<S>>,
-        scratch: &(impl Fn() -> S + Sync),
-        f: &(impl Fn(usize, &mut S) + Sync),
-    ) {
-        self.traverse(false, pool, scratch, f);
-    }
-
+    /// `f` on every supernode once all below it are done (`Up`) or all above it (`Down`:
+    /// parents before children); the subtrees in parallel when the current pool has several
+    /// threads, each task with a scratch from `pool` (or made by `scratch`; all returned to
+    /// `pool`).
     fn traverse<S: Send>(
         &self,
-        upward: bool,
+        direction: Direction,
         pool: &Mutex<Vec<S>>,
         scratch: &(impl Fn() -> S + Sync),
         f: &(impl Fn(usize, &mut S) + Sync),
@@ -490,12 +484,9 @@ impl SupernodeTree {
             f,
             parallel,
         };
-        let visit = |&s: &u32| {
-            if upward {
-                walk.up(s as usize)
-            } else {
-                walk.down(s as usize)
-            }
+        let visit = |&s: &u32| match direction {
+            Direction::Up => walk.up(s as usize),
+            Direction::Down => walk.down(s as usize),
         };
         if parallel {
             self.roots.par_iter().for_each(visit);
@@ -589,24 +580,17 @@ impl<S: Send, M: Fn() -> S + Sync, F: Fn(usize, &mut S) + Sync> Walk<'_, S, M, F
     }
 }
 
-impl<T: FactorScalar> Job<'_, T> {
+impl<'a, T: FactorScalar> Job<'a, T> {
     /// Factorise supernode `s` (every supernode below it is done).
     fn supernode(&self, s: usize, scratch: &mut Scratch<T>) {
         if self.failure.load(Ordering::Relaxed) != usize::MAX {
             // The factorisation has failed: nothing computed from here on is read.
             return;
         }
-        let sym = self.symbolic;
-        let begin = &self.tree.begin;
-        let (row_ptr, rows, nnz, val_ptr) = (
-            sym.col_ptr_for_row_idx(),
-            sym.row_idx(),
-            sym.nnz_per_super(),
-            sym.col_ptr_for_val(),
-        );
-        let (start, end) = (begin[s], begin[s + 1]);
+        let val_ptr = self.symbolic.col_ptr_for_val();
+        let (start, end) = (self.tree.begin[s], self.tree.begin[s + 1]);
         let cols = end - start;
-        let pattern = &rows[row_ptr[s]..row_ptr[s] + nnz[s]];
+        let pattern = self.pattern(s);
         let n_rows = cols + pattern.len();
         // SAFETY: supernode `s`'s values are written only here, by this thread; the updating
         // supernodes read below are in `s`'s subtree, finished before it started.
@@ -624,8 +608,7 @@ impl<T: FactorScalar> Job<'_, T> {
             // when the pool has several threads): the same arithmetic at any thread count.
             let local: &[usize] = local;
             let each = |(b, columns): (usize, &mut [T]), block: &mut BlockScratch<T>| {
-                let c0 = b * BLOCK_COLUMNS;
-                self.gather_and_update(s, c0, columns, local, &mut block.at, &mut block.update);
+                self.gather_and_update(s, b * BLOCK_COLUMNS, columns, local, block);
             };
             if rayon::current_num_threads() > 1 {
                 ls.par_chunks_mut(BLOCK_COLUMNS * n_rows).enumerate().for_each(|item| {
@@ -639,17 +622,13 @@ impl<T: FactorScalar> Job<'_, T> {
                     self.block_pool.lock().unwrap_or_else(|e| e.into_inner()).push(block);
                 });
             } else {
-                let mut block = BlockScratch {
-                    at: std::mem::take(&mut scratch.at),
-                    update: std::mem::take(&mut scratch.update),
-                };
+                let block = &mut scratch.block;
                 ls.chunks_mut(BLOCK_COLUMNS * n_rows)
                     .enumerate()
-                    .for_each(|item| each(item, &mut block));
-                (scratch.at, scratch.update) = (block.at, block.update);
+                    .for_each(|item| each(item, block));
             }
         } else {
-            self.gather_and_update(s, 0, ls, local, &mut scratch.at, &mut scratch.update);
+            self.gather_and_update(s, 0, ls, local, &mut scratch.block);
         }
         let local = &mut scratch.local;
         for &row in pattern {
@@ -670,28 +649,23 @@ impl<T: FactorScalar> Job<'_, T> {
             Par::Seq,
         );
     }
+
+    /// The rows of supernode `s`'s pattern (below its columns).
+    fn pattern(&self, s: usize) -> &'a [usize] {
+        let sym = self.symbolic;
+        let start = sym.col_ptr_for_row_idx()[s];
+        &sym.row_idx()[start..start + sym.nnz_per_super()[s]]
+    }
+
     /// Supernode `s`'s columns from `c0` on (`columns`, whole columns of its block, zeroed
     /// here): the matrix's entries gathered, then the updates of the supernodes below it
     /// subtracted in ascending order. `local` places each pattern row in the block.
-    fn gather_and_update(
-        &self,
-        s: usize,
-        c0: usize,
-        columns: &mut [T],
-        local: &[usize],
-        at: &mut Vec<usize>,
-        update: &mut Vec<T>,
-    ) {
-        let sym = self.symbolic;
+    fn gather_and_update(&self, s: usize, c0: usize, columns: &mut [T], local: &[usize], block: &mut BlockScratch<T>) {
+        let BlockScratch { at, update } = block;
+        let val_ptr = self.symbolic.col_ptr_for_val();
         let begin = &self.tree.begin;
-        let (row_ptr, rows, nnz, val_ptr) = (
-            sym.col_ptr_for_row_idx(),
-            sym.row_idx(),
-            sym.nnz_per_super(),
-            sym.col_ptr_for_val(),
-        );
         let (start, end) = (begin[s], begin[s + 1]);
-        let n_rows = end - start + nnz[s];
+        let n_rows = end - start + self.pattern(s).len();
         let c1 = c0 + columns.len() / n_rows;
         columns.fill(T::default());
         for (jj, j) in (start + c0..start + c1).enumerate() {
@@ -708,7 +682,7 @@ impl<T: FactorScalar> Job<'_, T> {
         for u in self.tree.updates(s) {
             let d = u.d as usize;
             let d_cols = begin[d + 1] - begin[d];
-            let d_pattern = &rows[row_ptr[d]..row_ptr[d] + nnz[d]];
+            let d_pattern = self.pattern(d);
             let d_rows = d_cols + d_pattern.len();
             let (first, within) = (u.first as usize, u.within as usize);
             let reach = &d_pattern[first..];
