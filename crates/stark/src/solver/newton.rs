@@ -325,14 +325,10 @@ const CUT_STEP_FRACTION: f64 = 0.25;
 /// above the rubber's, and the directions it gives overshoot into CCD cuts step after step (67
 /// Newton iterations in one step, 690 in the scene; 17 and 620 with this. spinning_box_cloth
 /// 2084 → 2076; twisting_cloth, simple_grasp, franka_cup and the towel cases unchanged).
+/// Not after full steps that raised the residual (a folded towel's layers leaving an unstable
+/// configuration): the projected form saves a few iterations there (156 → 146 in 10 fold steps)
+/// but costs ~57k eigen-decompositions per assembly, 7% of the wall time (BENCHMARKS.md).
 const TIGHTEN_AFTER_CUT_STEPS: usize = 2;
-/// The same after this many full steps under the definite form after which the force residual
-/// rose: the form is a poor model there too (a folded towel's layers near an unstable
-/// configuration: the residual rising ×1.1–1.5 per full step for 15 iterations). 10 folded-towel
-/// steps 160 → 147 Newton iterations, twisting_cloth 707 → 659, spinning_box_cloth 2076 → 2072;
-/// deformable_and_rigid_collisions 617 → 618; simple_grasp, franka_cup, kobuki_towel_carpet_1
-/// (first 0.5 s) unchanged.
-const TIGHTEN_AFTER_RISING_STEPS: usize = 2;
 
 /// Ask the terms for their closer definite form (`EnergyTerm::tighten_definite_form`); whether
 /// any assembles something different now.
@@ -516,11 +512,8 @@ pub fn solve(
     // Far from the solution (until a step is taken in full) the positive semi-definite forms of
     // the Hessians that are indefinite near their active set (contact barriers).
     let mut definite = FarFromSolution::new(settings.definite_far_from_solution);
-    // Steps under the definite form cut below `CUT_STEP_FRACTION` in this time step, full ones
-    // after which the residual rose, and the residual before the last full one.
+    // Steps under the definite form cut below `CUT_STEP_FRACTION` in this time step.
     let mut cut_definite_steps = 0usize;
-    let mut rising_definite_steps = 0usize;
-    let mut full_definite_step_from: Option<f64> = None;
     for t in terms.iter_mut() {
         t.use_definite_hessian(definite.on);
     }
@@ -606,13 +599,6 @@ pub fn solve(
                 }
             }
             residual = norm_inf(&ws.gradient) / dt;
-            if full_definite_step_from.take().is_some_and(|before| residual > before) {
-                rising_definite_steps += 1;
-                // From the next assembly on (this iterate's is made).
-                if rising_definite_steps == TIGHTEN_AFTER_RISING_STEPS && tighten_definite_forms(terms) {
-                    factor_reusable = false;
-                }
-            }
             report.residual_n = residual;
             report.iterations = iteration;
             if residual < settings.residual_tolerance_n {
@@ -964,9 +950,6 @@ pub fn solve(
             for t in terms.iter_mut() {
                 t.accept_iterate(&from, &to);
             }
-        }
-        if definite.on && alpha == 1.0 {
-            full_definite_step_from = Some(residual);
         }
         if definite.on && alpha < CUT_STEP_FRACTION {
             cut_definite_steps += 1;
