@@ -296,7 +296,7 @@ impl FarFromSolution {
     /// After a step of fraction `alpha` accepted at `residual_n`: whether the switch flipped.
     fn after_step(&mut self, alpha: f64, residual_n: f64) -> bool {
         let next = self.next(alpha, residual_n);
-        if self.on && alpha == 1.0 && self.hold_above_n.is_finite() {
+        if self.on && alpha >= 1.0 && self.hold_above_n.is_finite() {
             self.held_full_steps += 1;
         }
         let flipped = next != self.on;
@@ -307,13 +307,17 @@ impl FarFromSolution {
     /// The switch after a step of fraction `alpha` accepted at `residual_n`.
     fn next(&self, alpha: f64, residual_n: f64) -> bool {
         if self.on {
-            let held = self.held_full_steps + (alpha == 1.0 && self.hold_above_n.is_finite()) as usize;
+            let held = self.held_full_steps + (alpha >= 1.0 && self.hold_above_n.is_finite()) as usize;
             alpha < 1.0 || (residual_n >= self.hold_above_n && held < MAX_HELD_FULL_STEPS)
         } else {
             alpha < 0.25
         }
     }
 }
+
+/// The longest multiple of the Newton step an extrapolation along a concave direction tries (10
+/// folded-towel steps: 145, 139, 138, 140 Newton iterations with 4, 16, 64, 1024).
+const MAX_EXTRAPOLATION: f64 = 16.0;
 
 /// A Newton step cut below this fraction (by CCD or the line search) counts as cut short.
 const CUT_STEP_FRACTION: f64 = 0.25;
@@ -514,6 +518,10 @@ pub fn solve(
     let mut definite = FarFromSolution::new(settings.definite_far_from_solution);
     // Steps under the definite form cut below `CUT_STEP_FRACTION` in this time step.
     let mut cut_definite_steps = 0usize;
+    // The residual before the last full step under the definite form, and whether the one after
+    // it was higher (the definite model underestimates how far the iterate must go).
+    let mut full_definite_step_from: Option<f64> = None;
+    let mut rising;
     for t in terms.iter_mut() {
         t.use_definite_hessian(definite.on);
     }
@@ -599,6 +607,7 @@ pub fn solve(
                 }
             }
             residual = norm_inf(&ws.gradient) / dt;
+            rising = full_definite_step_from.take().is_some_and(|before| residual > before);
             report.residual_n = residual;
             report.iterations = iteration;
             if residual < settings.residual_tolerance_n {
@@ -787,6 +796,7 @@ pub fn solve(
             EvalMode::ExactHessian
         };
         let mut accepted = false;
+        let mut accepted_energy = f64::NAN;
         let mut first_trial_accepted = false;
         let mut evaluation_in_line_search_s = 0.0;
         // The forces' rounding floor at the current iterate, taken before an assembly in the
@@ -873,6 +883,7 @@ pub fn solve(
                 cut.print(terms, &here, &trial, &dofs, &ws.step);
             }
             if e.is_finite() && armijo && (!unresolvable || e < energy - resolvable) {
+                accepted_energy = e;
                 accepted = true;
                 first_trial_accepted = trial_index == 0;
                 assembled = speculative.take();
@@ -939,6 +950,66 @@ pub fn solve(
                 why,
             });
         }
+        if accepted && alpha == 1.0 && definite.on && rising && accepted_energy - energy < descent {
+            // The full step lowered the energy by more than its slope promised: the energy curves
+            // downwards along it, and the last full step raised the residual. The iterate is
+            // leaving an unstable configuration (a folded towel's layers), whose negative
+            // curvature the definite model does not see: its steps grow only geometrically (by
+            // ~1.15 per iteration there). Go further along the step, doubling, while the energy
+            // keeps falling and CCD allows the whole segment.
+            let t_extrapolate = Instant::now();
+            let from = problem.state(v, &ws.x, &ws.poses);
+            let mut best = (1.0, accepted_energy);
+            let mut prepared_elsewhere = false;
+            let mut a = 2.0;
+            while a <= MAX_EXTRAPOLATION {
+                axpy_velocities(&dofs, v, &ws.step, a, &mut ws.trial_v);
+                problem.place(&ws.trial_v, &mut ws.trial_x, &mut ws.trial_poses);
+                let to = problem.state(&ws.trial_v, &ws.trial_x, &ws.trial_poses);
+                if max_step(terms, &from, &to) < 1.0 || !terms.iter_mut().all(|t| t.is_valid_state(&to)) {
+                    break;
+                }
+                prepared_elsewhere = true;
+                for t in terms.iter_mut() {
+                    t.prepare_evaluation(&to);
+                }
+                let e = total_energy(terms, &to);
+                report.line_search_evaluations += 1;
+                if !(e.is_finite() && e < best.1 + settings.armijo * (a - best.0) * descent) {
+                    break;
+                }
+                best = (a, e);
+                a *= 2.0;
+            }
+            if trace {
+                eprintln!(
+                    "  extrapolated to {:.0} × the step (ΔE {:.3e} J at 1, {:.3e} J there)",
+                    best.0,
+                    accepted_energy - energy,
+                    best.1 - energy
+                );
+            }
+            alpha = best.0;
+            axpy_velocities(&dofs, v, &ws.step, alpha, &mut ws.trial_v);
+            problem.place(&ws.trial_v, &mut ws.trial_x, &mut ws.trial_poses);
+            if prepared_elsewhere {
+                let to = problem.state(&ws.trial_v, &ws.trial_x, &ws.trial_poses);
+                for t in terms.iter_mut() {
+                    t.prepare_evaluation(&to);
+                }
+            }
+            if alpha > 1.0 {
+                // The speculative assembly, and the terms' tentative acceptance, were the full
+                // step's.
+                assembled = None;
+                if std::mem::take(&mut tentative) {
+                    for t in terms.iter_mut() {
+                        t.restore_iterate();
+                    }
+                }
+            }
+            report.times.line_search_s += t_extrapolate.elapsed().as_secs_f64();
+        }
         prepared = true;
         if !tentative {
             // Terms' own unknowns follow the accepted step (friction's dual variables), unless
@@ -950,6 +1021,9 @@ pub fn solve(
             for t in terms.iter_mut() {
                 t.accept_iterate(&from, &to);
             }
+        }
+        if definite.on && alpha >= 1.0 {
+            full_definite_step_from = Some(residual);
         }
         if definite.on && alpha < CUT_STEP_FRACTION {
             cut_definite_steps += 1;
@@ -996,7 +1070,8 @@ pub fn solve(
         }
         std::mem::swap(v, &mut ws.trial_v);
         report.iterations = iteration + 1;
-        if settings.step_tolerance_m_s > 0.0 && norm_inf(&ws.step) < settings.step_tolerance_m_s {
+        // (An extrapolated step moved further than `ws.step`.)
+        if settings.step_tolerance_m_s > 0.0 && alpha <= 1.0 && norm_inf(&ws.step) < settings.step_tolerance_m_s {
             report.converged_by = ConvergedBy::Step;
             return Ok(report);
         }
@@ -1099,10 +1174,24 @@ mod tests {
         );
     }
 
+    /// The shape `f(vₓ)` of [`Counting`]'s energy.
+    #[derive(Clone, Copy, PartialEq)]
+    enum Well {
+        /// A quartic well at 1: Newton's full steps are accepted.
+        Quartic,
+        /// A pseudo-Huber well at 10: Newton's first full step from 0 overshoots by far.
+        Huber,
+        /// `¼x⁴ − ½x² + c x`: 0 is near the top of a hill between two wells at ±1.
+        Hilltop,
+    }
+
     /// One node, `f(vₓ) + ½(v_y² + v_z²)`; counts energy evaluations, assemblies, and the
-    /// iterates it accepted (its own state, saved and restored like friction's duals).
+    /// iterates it accepted (its own state, saved and restored like friction's duals). With a
+    /// definite curvature it has a definite form, `max(f″, that)`, which Newton switches on.
     struct Counting {
-        huber: bool,
+        well: Well,
+        definite_curvature: Option<f64>,
+        definite: bool,
         energies: Mutex<usize>,
         assemblies: Mutex<usize>,
         accepted: usize,
@@ -1110,26 +1199,38 @@ mod tests {
     }
 
     impl Counting {
-        fn new(huber: bool) -> Self {
+        fn new(well: Well) -> Self {
             Self {
-                huber,
+                well,
+                definite_curvature: None,
+                definite: false,
                 energies: Mutex::new(0),
                 assemblies: Mutex::new(0),
                 accepted: 0,
                 saved: 0,
             }
         }
-        /// `f`, `f′`, `f″`: a quartic well at 1 (Newton's full steps are accepted), or a
-        /// pseudo-Huber well at 10 (Newton's first full step from 0 overshoots by far).
+        /// `f`, `f′`, `f″`.
         fn f(&self, x: f64) -> [f64; 3] {
             let m = 0.01;
-            if self.huber {
-                let d = x - 10.0;
-                let s = (1.0 + d * d).sqrt();
-                [s + 0.5 * m * x * x, d / s + m * x, 1.0 / (s * s * s) + m]
-            } else {
-                let d = x - 1.0;
-                [0.25 * d.powi(4) + 0.5 * m * x * x, d.powi(3) + m * x, 3.0 * d * d + m]
+            match self.well {
+                Well::Huber => {
+                    let d = x - 10.0;
+                    let s = (1.0 + d * d).sqrt();
+                    [s + 0.5 * m * x * x, d / s + m * x, 1.0 / (s * s * s) + m]
+                }
+                Well::Quartic => {
+                    let d = x - 1.0;
+                    [0.25 * d.powi(4) + 0.5 * m * x * x, d.powi(3) + m * x, 3.0 * d * d + m]
+                }
+                Well::Hilltop => {
+                    let c = -1e-3;
+                    [
+                        0.25 * x.powi(4) - 0.5 * x * x + c * x,
+                        x.powi(3) - x + c,
+                        3.0 * x * x - 1.0,
+                    ]
+                }
             }
         }
     }
@@ -1159,9 +1260,20 @@ mod tests {
             out[0] = f + 0.5 * (v.y * v.y + v.z * v.z);
             out[1..4].copy_from_slice(&[df, v.y, v.z]);
             out[4..].iter_mut().for_each(|h| *h = 0.0);
-            out[4] = ddf;
+            out[4] = match self.definite_curvature {
+                Some(c) if self.definite => ddf.max(c),
+                _ => ddf,
+            };
             out[8] = 1.0;
             out[12] = 1.0;
+        }
+        fn use_definite_hessian(&mut self, on: bool) -> bool {
+            let changed = self.definite != on && self.has_definite_form();
+            self.definite = on;
+            changed
+        }
+        fn has_definite_form(&self) -> bool {
+            self.definite_curvature.is_some()
         }
         fn accept_iterate(&mut self, _from: &EvalState, _to: &EvalState) {
             self.accepted += 1;
@@ -1202,7 +1314,7 @@ mod tests {
     /// evaluations, and exactly one assembly per iterate.
     #[test]
     fn accepted_trials_are_assembled_once() {
-        let mut term = Counting::new(false);
+        let mut term = Counting::new(Well::Quartic);
         let (report, x) = solve_counting(&mut term);
         assert!(report.iterations >= 5, "{report:?}");
         assert_eq!(report.min_step_fraction, 1.0);
@@ -1218,7 +1330,7 @@ mod tests {
     /// later line searches evaluate energies only.
     #[test]
     fn a_cut_speculative_trial_is_undone() {
-        let mut term = Counting::new(true);
+        let mut term = Counting::new(Well::Huber);
         let (report, x) = solve_counting(&mut term);
         assert!(
             report.line_search_evaluations > report.iterations,
@@ -1228,6 +1340,27 @@ mod tests {
         assert!(df.abs() < 1e-8, "converged: f′ = {df}");
         assert_eq!(term.accepted, report.iterations);
         assert!(*term.energies.lock().unwrap() > 0);
+    }
+
+    /// Where the definite form's full steps keep lowering the energy by more than their slope
+    /// and raising the residual, Newton extrapolates along them: from the hilltop into the well
+    /// in a few iterations where the definite steps alone would grow by 1.1 per iteration
+    /// (over 60 iterations to get from 1e-3 to the well's edge).
+    #[test]
+    fn concave_definite_steps_are_extrapolated() {
+        // The definite form overestimates the hilltop's curvature (−1) as 10, like the
+        // projected barriers of a towel's layers leaving an unstable configuration: its steps
+        // alone grow by 1.1 per iteration.
+        let mut term = Counting::new(Well::Hilltop);
+        term.definite_curvature = Some(10.0);
+        let (report, x) = solve_counting(&mut term);
+        let [_, df, ddf] = term.f(x);
+        assert!(
+            df.abs() < 1e-6 && ddf > 0.0,
+            "converged into a well: x = {x}, f′ = {df}"
+        );
+        assert!(x > 0.9, "down the slope it started on: x = {x}");
+        assert!(report.iterations <= 20, "{report:?}");
     }
 
     #[test]
