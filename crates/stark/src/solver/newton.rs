@@ -518,8 +518,9 @@ pub fn solve(
     let mut definite = FarFromSolution::new(settings.definite_far_from_solution);
     // Steps under the definite form cut below `CUT_STEP_FRACTION` in this time step.
     let mut cut_definite_steps = 0usize;
-    // The residual before the last full step under the definite form, and whether the one after
-    // it was higher (the definite model underestimates how far the iterate must go).
+    // The residual before the last step if it was a full one under the definite form, and
+    // whether the one after it is higher (the definite model underestimates how far the iterate
+    // must go; kept across a re-assembly after a failed factorisation).
     let mut full_definite_step_from: Option<f64> = None;
     let mut rising;
     for t in terms.iter_mut() {
@@ -607,7 +608,7 @@ pub fn solve(
                 }
             }
             residual = norm_inf(&ws.gradient) / dt;
-            rising = full_definite_step_from.take().is_some_and(|before| residual > before);
+            rising = full_definite_step_from.is_some_and(|before| residual > before);
             report.residual_n = residual;
             report.iterations = iteration;
             if residual < settings.residual_tolerance_n {
@@ -1022,9 +1023,7 @@ pub fn solve(
                 t.accept_iterate(&from, &to);
             }
         }
-        if definite.on && alpha >= 1.0 {
-            full_definite_step_from = Some(residual);
-        }
+        full_definite_step_from = (definite.on && alpha >= 1.0).then_some(residual);
         if definite.on && alpha < CUT_STEP_FRACTION {
             cut_definite_steps += 1;
             if cut_definite_steps == TIGHTEN_AFTER_CUT_STEPS && tighten_definite_forms(terms) {
