@@ -93,7 +93,8 @@ pub trait EnergyTerm: Send + Sync {
 
     /// Newton's steps under the definite form were cut short again and again in this time step:
     /// a term whose definite form is a cheap approximation (contact's Gauss–Newton barrier
-    /// Hessians) switches to its closer form (projected) until the next time step. Returns whether the term assembles anything different now.
+    /// Hessians) switches to its closer form (projected) until the next time step. Returns
+    /// whether the term assembles anything different now.
     fn tighten_definite_form(&mut self) -> bool {
         false
     }

@@ -259,6 +259,14 @@ fn axpy_velocities(dofs: &DofMap, base: &[Vector3<f64>], step: &[f64], alpha: f6
     }
 }
 
+impl NewtonWorkspace {
+    /// The trial state `v + alpha·step` (velocities, positions, poses).
+    fn place_trial(&mut self, problem: &StepProblem, dofs: &DofMap, v: &[Vector3<f64>], alpha: f64) {
+        axpy_velocities(dofs, v, &self.step, alpha, &mut self.trial_v);
+        problem.place(&self.trial_v, &mut self.trial_x, &mut self.trial_poses);
+    }
+}
+
 /// Newton's globalisation switch for the barriers' definite Hessian form, with its hysteresis:
 /// on far from the solution; off once a step is taken in full (the quadratic model is trusted
 /// there) and the residual is below where the switch was last forced on; on again after a step
@@ -762,8 +770,7 @@ pub fn solve(
         let t_ccd = Instant::now();
 
         // Line search.
-        axpy_velocities(&dofs, v, &ws.step, 1.0, &mut ws.trial_v);
-        problem.place(&ws.trial_v, &mut ws.trial_x, &mut ws.trial_poses);
+        ws.place_trial(problem, &dofs, v, 1.0);
         let mut alpha = {
             let from = problem.state(v, &ws.x, &ws.poses);
             let to = problem.state(&ws.trial_v, &ws.trial_x, &ws.trial_poses);
@@ -824,8 +831,7 @@ pub fn solve(
         // The trial energy closest to the current one (how far apart they stay as α → 0).
         let mut closest = f64::INFINITY;
         for trial_index in 0..settings.max_line_search_iterations {
-            axpy_velocities(&dofs, v, &ws.step, alpha, &mut ws.trial_v);
-            problem.place(&ws.trial_v, &mut ws.trial_x, &mut ws.trial_poses);
+            ws.place_trial(problem, &dofs, v, alpha);
             {
                 let trial = problem.state(&ws.trial_v, &ws.trial_x, &ws.trial_poses);
                 if !terms.iter_mut().all(|t| t.is_valid_state(&trial)) {
@@ -959,13 +965,12 @@ pub fn solve(
             // ~1.15 per iteration there). Go further along the step, doubling, while the energy
             // keeps falling and CCD allows the whole segment.
             let t_extrapolate = Instant::now();
-            let from = problem.state(v, &ws.x, &ws.poses);
             let mut best = (1.0, accepted_energy);
             let mut prepared_elsewhere = false;
             let mut a = 2.0;
             while a <= MAX_EXTRAPOLATION {
-                axpy_velocities(&dofs, v, &ws.step, a, &mut ws.trial_v);
-                problem.place(&ws.trial_v, &mut ws.trial_x, &mut ws.trial_poses);
+                ws.place_trial(problem, &dofs, v, a);
+                let from = problem.state(v, &ws.x, &ws.poses);
                 let to = problem.state(&ws.trial_v, &ws.trial_x, &ws.trial_poses);
                 if max_step(terms, &from, &to) < 1.0 || !terms.iter_mut().all(|t| t.is_valid_state(&to)) {
                     break;
@@ -991,8 +996,7 @@ pub fn solve(
                 );
             }
             alpha = best.0;
-            axpy_velocities(&dofs, v, &ws.step, alpha, &mut ws.trial_v);
-            problem.place(&ws.trial_v, &mut ws.trial_x, &mut ws.trial_poses);
+            ws.place_trial(problem, &dofs, v, alpha);
             if prepared_elsewhere {
                 let to = problem.state(&ws.trial_v, &ws.trial_x, &ws.trial_poses);
                 for t in terms.iter_mut() {
@@ -1194,7 +1198,10 @@ mod tests {
         energies: Mutex<usize>,
         assemblies: Mutex<usize>,
         accepted: usize,
-        saved: usize,
+        /// The last accepted iterate's vₓ, and accepted steps that did not start there.
+        last_to: f64,
+        breaks: usize,
+        saved: (usize, f64),
     }
 
     impl Counting {
@@ -1206,7 +1213,9 @@ mod tests {
                 energies: Mutex::new(0),
                 assemblies: Mutex::new(0),
                 accepted: 0,
-                saved: 0,
+                last_to: 0.0,
+                breaks: 0,
+                saved: (0, 0.0),
             }
         }
         /// `f`, `f′`, `f″`.
@@ -1274,14 +1283,16 @@ mod tests {
         fn has_definite_form(&self) -> bool {
             self.definite_curvature.is_some()
         }
-        fn accept_iterate(&mut self, _from: &EvalState, _to: &EvalState) {
+        fn accept_iterate(&mut self, from: &EvalState, to: &EvalState) {
             self.accepted += 1;
+            self.breaks += (from.v[0].x != self.last_to) as usize;
+            self.last_to = to.v[0].x;
         }
         fn save_iterate(&mut self) {
-            self.saved = self.accepted;
+            self.saved = (self.accepted, self.last_to);
         }
         fn restore_iterate(&mut self) {
-            self.accepted = self.saved;
+            (self.accepted, self.last_to) = self.saved;
         }
     }
 
@@ -1360,6 +1371,11 @@ mod tests {
         );
         assert!(x > 0.9, "down the slope it started on: x = {x}");
         assert!(report.iterations <= 20, "{report:?}");
+        // An extrapolation undoes the full step's tentative acceptance and accepts the step it
+        // took: one acceptance per iterate, each from where the last one ended.
+        assert_eq!(term.accepted, report.iterations);
+        assert_eq!(term.breaks, 0);
+        assert_eq!(term.last_to, x);
     }
 
     #[test]
