@@ -154,6 +154,12 @@ impl FrictionElement {
     /// Value, gradient and the primal–dual Hessian (closed form, positive semi-definite; see
     /// the module's doc) into `out`; unused nodes get zeros.
     pub fn derivatives(&self, x: &[Vector3<f64>; 4], out: &mut HyperDual<4>) {
+        *out = HyperDual::constant(0.0);
+        self.add_derivatives(x, out);
+    }
+
+    /// [`FrictionElement::derivatives`] added to `out` (a barrier pair's on the same nodes).
+    pub fn add_derivatives(&self, x: &[Vector3<f64>; 4], out: &mut HyperDual<4>) {
         let u = self.slip_f64(x);
         let eps = self.eps_m;
         let y = self.slip_norm(&u);
@@ -174,7 +180,7 @@ impl FrictionElement {
             [c * (1.0 - dphi * sym(0, 0)), -c * dphi * sym(0, 1)],
             [-c * dphi * sym(1, 0), c * (1.0 - dphi * sym(1, 1))],
         ];
-        out.value = ml * f0;
+        out.value += ml * f0;
         // ∂u_k/∂x_{i,d} = c_i T_k[d]: the gradient is c_i (T g_u) and the Hessian's block (i, j)
         // is c_i c_j (T H_u Tᵀ), one 3×3 matrix for all blocks.
         let t = &self.basis;
@@ -193,13 +199,13 @@ impl FrictionElement {
         let c: [f64; 4] = std::array::from_fn(|i| if i < self.len { self.weights[i] } else { 0.0 });
         for i in 0..4 {
             for d in 0..3 {
-                out.grad[i][d] = c[i] * gx[d];
+                out.grad[i][d] += c[i] * gx[d];
             }
             for j in 0..4 {
                 let cc = c[i] * c[j];
                 for d in 0..3 {
                     for e in 0..3 {
-                        out.hess[i][d][j][e] = cc * m[d][e];
+                        out.hess[i][d][j][e] += cc * m[d][e];
                     }
                 }
             }

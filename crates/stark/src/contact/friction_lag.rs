@@ -61,5 +61,52 @@ impl Contact {
             })
             .collect();
         self.stats.friction_pairs = self.friction_elements.len();
+        self.friction_by_nodes.clear();
+        for (i, f) in self.friction_elements.iter().enumerate() {
+            self.friction_by_nodes.entry(f.nodes).or_insert(i as u32);
+        }
+        self.match_friction();
+    }
+
+    /// Pair each barrier pair with the friction element on the same nodes, if any and not taken
+    /// by an earlier pair ([`Contact::pair_friction`], [`Contact::lone_friction`]); a new
+    /// layout (`version`) if that changed the elements. The pairs and the friction elements
+    /// both follow the candidates' order, so the next element after the last match is tried
+    /// first.
+    pub(super) fn match_friction(&mut self) {
+        let n = self.friction_elements.len();
+        let mut taken = vec![false; n];
+        let mut next = 0usize;
+        let pair_friction: Vec<u32> = self
+            .pairs
+            .iter()
+            .map(|p| {
+                let found = if next < n && self.friction_elements[next].nodes == p.nodes && !taken[next] {
+                    Some(next)
+                } else {
+                    self.friction_by_nodes
+                        .get(&p.nodes)
+                        .map(|&i| i as usize)
+                        .filter(|&i| !taken[i])
+                };
+                match found {
+                    Some(i) => {
+                        taken[i] = true;
+                        next = i + 1;
+                        i as u32
+                    }
+                    None => NO_FRICTION,
+                }
+            })
+            .collect();
+        let lone: Vec<u32> = (0..n as u32).filter(|&i| !taken[i as usize]).collect();
+        if pair_friction != self.pair_friction || lone != self.lone_friction {
+            self.version += 1;
+        }
+        self.pair_friction = pair_friction;
+        self.lone_friction = lone;
     }
 }
+
+/// [`Contact::pair_friction`] of a pair without a friction element.
+pub(super) const NO_FRICTION: u32 = u32::MAX;

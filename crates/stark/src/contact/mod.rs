@@ -190,6 +190,13 @@ pub struct Contact {
     friction: Vec<f64>,
     pairs: Vec<ContactPair>,
     friction_elements: Vec<FrictionElement>,
+    /// Per pair, the friction element on the same nodes evaluated with it as one element
+    /// ([`NO_FRICTION`] if none): one scatter into the matrix instead of two.
+    pair_friction: Vec<u32>,
+    /// The friction elements no pair carries, evaluated as elements of their own.
+    lone_friction: Vec<u32>,
+    /// The first friction element on each stencil (set with the friction elements).
+    friction_by_nodes: std::collections::HashMap<[u32; 4], u32>,
     /// The friction duals before a tentative acceptance (`EnergyTerm::save_iterate`).
     saved_duals: Vec<[f64; 2]>,
     /// `κ` per pair of objects.
@@ -238,6 +245,9 @@ impl Default for Contact {
             friction: vec![],
             pairs: vec![],
             friction_elements: vec![],
+            pair_friction: vec![],
+            lone_friction: vec![],
+            friction_by_nodes: Default::default(),
             saved_duals: vec![],
             kappa: PairStiffness::default(),
             object_masses_kg: vec![],

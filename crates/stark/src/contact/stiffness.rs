@@ -233,7 +233,7 @@ impl Contact {
             gradients.par_chunks_mut(3 * w).enumerate().for_each_init(
                 || vec![0.0; element_stride(w)],
                 |out, (e, g)| {
-                    this.evaluate_element(e, state, EvalMode::ExactHessian, out);
+                    this.evaluate_contact_element(e, state, EvalMode::ExactHessian, false, out);
                     g.copy_from_slice(&out[1..1 + 3 * w]);
                 },
             );

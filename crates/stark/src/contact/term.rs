@@ -1,5 +1,6 @@
 //! Contact as a solver term: elements, their derivatives in the DOF layout, and the step hooks.
 
+use super::friction_lag::NO_FRICTION;
 use super::pairs::{pair_derivatives, pair_energy};
 use super::Contact;
 use super::PairHessian;
@@ -29,7 +30,9 @@ impl EnergyTerm for Contact {
         "contact"
     }
     fn num_elements(&self) -> usize {
-        self.pairs.len() + self.friction_elements.len()
+        // The pairs (each with the friction element on its nodes, if any), then the friction
+        // elements no pair carries.
+        self.pairs.len() + self.lone_friction.len()
     }
     fn stencil_width(&self, state: &EvalState) -> usize {
         // A point of a rigid body against a deformable triangle couples 2 + 3 blocks.
@@ -40,11 +43,11 @@ impl EnergyTerm for Contact {
         }
     }
     fn write_stencils(&self, state: &EvalState, out: &mut [u32]) {
-        let all = self
-            .pairs
-            .iter()
-            .map(|p| p.nodes)
-            .chain(self.friction_elements.iter().map(|f| f.nodes));
+        let all = self.pairs.iter().map(|p| p.nodes).chain(
+            self.lone_friction
+                .iter()
+                .map(|&f| self.friction_elements[f as usize].nodes),
+        );
         let w = self.stencil_width(state);
         for (o, nodes) in out.chunks_exact_mut(w).zip(all) {
             if w == 4 {
@@ -77,66 +80,7 @@ impl EnergyTerm for Contact {
         barrier_energy + friction_energy
     }
     fn evaluate_element(&self, e: usize, state: &EvalState, mode: EvalMode, out: &mut [f64]) {
-        let mut d = HyperDual::<4>::constant(0.0);
-        // A barrier pair's Hessian is indefinite (the distance curves), and far from the solution
-        // its negative curvature can make the whole Hessian indefinite: there the pairs take a
-        // positive semi-definite form (IPC). Near the solution the other energies (inertia above
-        // all) carry that curvature, and the projected form would only overestimate it: Newton
-        // would converge linearly (measured on a folded towel under a robot: a contraction of
-        // 0.69 per iteration over 20 iterations at full steps). There the exact Hessian, and the
-        // solver projects anyway when the total turns out indefinite.
-        let hessian = if mode == EvalMode::ExactHessian && !self.definite_barriers {
-            PairHessian::Exact
-        } else if self.definite_projected {
-            PairHessian::Projected
-        } else {
-            self.settings.hessian
-        };
-        if e < self.pairs.len() {
-            let p = &self.pairs[e];
-            pair_derivatives(
-                p,
-                &Self::stencil_x(&p.nodes, state.x),
-                p.kappa * p.multiplicity,
-                self.settings.barrier,
-                hessian,
-                &mut d,
-            );
-        } else {
-            let f = &self.friction_elements[e - self.pairs.len()];
-            f.derivatives(&Self::stencil_x(&f.nodes, state.x), &mut d);
-        }
-        if out.len() == element_stride(4) {
-            write_deformable_element(&d, state.dt, out);
-        } else {
-            let nodes = if e < self.pairs.len() {
-                self.pairs[e].nodes
-            } else {
-                self.friction_elements[e - self.pairs.len()].nodes
-            };
-            let maps = node_maps(&nodes, state);
-            if maps.iter().all(|m| matches!(m, NodeMap::Free { .. } | NodeMap::Fixed)) {
-                // No rigid node (e.g. towel–towel pairs in a scene with bodies): the map is
-                // `dt·I` per node, written straight into the wider layout.
-                let mut next = 0;
-                let slots = maps.map(|m| {
-                    matches!(m, NodeMap::Free { .. }).then(|| {
-                        next += 1;
-                        next - 1
-                    })
-                });
-                write_deformable_element_in_slots(&d, &slots, state.dt, out);
-                return;
-            }
-            // Through the kinematic map; the position-space Hessian is already positive
-            // semi-definite, the rotation's second-order term may not be.
-            let projection = if hessian == PairHessian::Exact {
-                MapProjection::None
-            } else {
-                MapProjection::SecondOrderOnly
-            };
-            map_element(&maps, &d, state.dt, 5, projection, out);
-        }
+        self.evaluate_contact_element(e, state, mode, true, out);
     }
     fn before_step(&mut self, state: &EvalState) {
         // The last step's candidates serve while they cover the positions, unless objects,
@@ -199,8 +143,12 @@ impl EnergyTerm for Contact {
         {
             self.version += 1;
         }
+        let same_stencils = pairs.iter().map(|p| p.nodes).eq(self.pairs.iter().map(|p| p.nodes));
         self.pairs = pairs;
         self.stats.active_pairs = self.pairs.len();
+        if !same_stencils {
+            self.match_friction();
+        }
     }
     fn rebalance(&mut self, state: &EvalState, gradient: &[f64]) -> bool {
         self.rebalance_stiffness(state, gradient)
@@ -279,5 +227,75 @@ impl EnergyTerm for Contact {
         self.stats.validity_checks = checks;
         self.stats.invalid_trials = rejected;
         self.stats.validity_time_s = seconds;
+    }
+}
+
+impl Contact {
+    /// Element `e`'s derivatives in the DOF layout (see `EnergyTerm::evaluate_element`); a
+    /// pair's with its friction element's only if `with_friction` (the stiffness balance reads
+    /// the barriers' gradients alone).
+    pub(super) fn evaluate_contact_element(
+        &self,
+        e: usize,
+        state: &EvalState,
+        mode: EvalMode,
+        with_friction: bool,
+        out: &mut [f64],
+    ) {
+        let mut d = HyperDual::<4>::constant(0.0);
+        // A barrier pair's Hessian is indefinite (the distance curves), and far from the solution
+        // its negative curvature can make the whole Hessian indefinite: there the pairs take a
+        // positive semi-definite form (IPC). Near the solution the other energies (inertia above
+        // all) carry that curvature, and the projected form would only overestimate it: Newton
+        // would converge linearly (measured on a folded towel under a robot: a contraction of
+        // 0.69 per iteration over 20 iterations at full steps). There the exact Hessian, and the
+        // solver projects anyway when the total turns out indefinite.
+        let hessian = if mode == EvalMode::ExactHessian && !self.definite_barriers {
+            PairHessian::Exact
+        } else if self.definite_projected {
+            PairHessian::Projected
+        } else {
+            self.settings.hessian
+        };
+        let nodes = if e < self.pairs.len() {
+            let p = &self.pairs[e];
+            let x = Self::stencil_x(&p.nodes, state.x);
+            pair_derivatives(p, &x, p.kappa * p.multiplicity, self.settings.barrier, hessian, &mut d);
+            let f = self.pair_friction[e];
+            if with_friction && f != NO_FRICTION {
+                self.friction_elements[f as usize].add_derivatives(&x, &mut d);
+            }
+            p.nodes
+        } else {
+            let f = &self.friction_elements[self.lone_friction[e - self.pairs.len()] as usize];
+            f.derivatives(&Self::stencil_x(&f.nodes, state.x), &mut d);
+            f.nodes
+        };
+        if out.len() == element_stride(4) {
+            write_deformable_element(&d, state.dt, out);
+        } else {
+            let maps = node_maps(&nodes, state);
+            if maps.iter().all(|m| matches!(m, NodeMap::Free { .. } | NodeMap::Fixed)) {
+                // No rigid node (e.g. towel–towel pairs in a scene with bodies): the map is
+                // `dt·I` per node, written straight into the wider layout.
+                let mut next = 0;
+                let slots = maps.map(|m| {
+                    matches!(m, NodeMap::Free { .. }).then(|| {
+                        next += 1;
+                        next - 1
+                    })
+                });
+                write_deformable_element_in_slots(&d, &slots, state.dt, out);
+                return;
+            }
+            // Through the kinematic map; the position-space Hessian is already positive
+            // semi-definite, the rotation's second-order term may not be.
+            let projection = if hessian == PairHessian::Exact {
+                MapProjection::None
+            } else {
+                MapProjection::SecondOrderOnly
+            };
+            map_element(&maps, &d, state.dt, 5, projection, out);
+        }
     }
 }

@@ -429,3 +429,144 @@ fn a_tightened_definite_form_is_the_projected_one_until_the_next_step() {
         assert_eq!(hessian(contact), adaptive);
     });
 }
+
+/// A barrier pair and the friction element on its nodes are one element (one scatter into the
+/// matrix); friction elements whose pair is gone are elements of their own. Every friction
+/// element enters once, and the elements sum to the barrier pairs' and the friction
+/// elements' derivatives taken apart.
+#[test]
+fn friction_elements_are_assembled_once_with_their_pair_or_alone() {
+    use crate::energy::kinematics::write_deformable_element;
+    use crate::energy::term::element_stride;
+    use crate::energy::{EvalMode, HyperDual, Scalar};
+    use std::collections::HashMap;
+    let mut settings = Settings::default();
+    settings.contact.default_thickness_m = Some(1e-3);
+    let mut sim = Simulation::new(settings).unwrap();
+    let (xa, ta) = wavy_grid(8, 0.2, 0.0, 0.0);
+    let (xb, tb) = wavy_grid(8, 0.2, 1.2e-3, 1.0);
+    let a = sim.add_prescribed_surface("a", &xa, &ta, 1e-3, 1e4).unwrap();
+    let b = sim.add_prescribed_surface("b", &xb, &tb, 1e-3, 1e4).unwrap();
+    sim.contact.set_friction(a.contact, b.contact, 0.5).unwrap();
+    let masses_kg = vec![1e-3; sim.nodes.len()];
+    sim.contact.initialize_stiffness(&masses_kg, 0.01, 9.81);
+    // Half the upper grid moved sideways and 0.3 mm closer: pairs there change after the lag,
+    // those under the other half stay.
+    let moved: Vec<Vector3<f64>> = sim
+        .nodes
+        .x
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            if i >= xa.len() {
+                p + Vector3::new(-1.2e-2, 0.0, -3e-4) * f64::from(p.x < 0.1)
+            } else {
+                *p
+            }
+        })
+        .collect();
+    at_rest(&mut sim, |contact, state| {
+        contact.before_step(state);
+        let lagged = contact.friction_elements.len();
+        contact.prepare_evaluation(state);
+        let before: Vec<[u32; 4]> = contact.pairs.iter().map(|p| p.nodes).collect();
+        let trial = EvalState { x: &moved, ..*state };
+        contact.prepare_evaluation(&trial);
+        let same = contact.pairs.iter().filter(|p| before.contains(&p.nodes)).count();
+        assert!(
+            same > 0 && same < contact.pairs.len(),
+            "{same} of {} pairs as lagged",
+            contact.pairs.len()
+        );
+        let carried = contact
+            .pair_friction
+            .iter()
+            .filter(|&&f| f != super::friction_lag::NO_FRICTION)
+            .count();
+        assert!(
+            lagged > 50 && carried > 0 && !contact.lone_friction.is_empty(),
+            "{lagged} lagged, {carried} carried, {} alone",
+            contact.lone_friction.len()
+        );
+        let mut entered: Vec<u32> = contact
+            .pair_friction
+            .iter()
+            .copied()
+            .filter(|&f| f != super::friction_lag::NO_FRICTION)
+            .chain(contact.lone_friction.iter().copied())
+            .collect();
+        entered.sort_unstable();
+        assert_eq!(
+            entered,
+            (0..lagged as u32).collect::<Vec<_>>(),
+            "each friction element once"
+        );
+        for (p, &f) in contact.pairs.iter().zip(&contact.pair_friction) {
+            if f != super::friction_lag::NO_FRICTION {
+                assert_eq!(contact.friction_elements[f as usize].nodes, p.nodes);
+            }
+        }
+
+        // Gradient and Hessian blocks by node, from the elements and from the parts apart.
+        type Sums = (HashMap<u32, [f64; 3]>, HashMap<(u32, u32), [f64; 9]>);
+        let add = |sums: &mut Sums, nodes: &[u32; 4], out: &[f64]| {
+            for (i, &r) in nodes.iter().enumerate().filter(|(_, &r)| r != NO_DOF) {
+                let g = sums.0.entry(r).or_default();
+                for k in 0..3 {
+                    g[k] += out[1 + 3 * i + k];
+                }
+                for (j, &c) in nodes.iter().enumerate().filter(|(_, &c)| c != NO_DOF) {
+                    let h = sums.1.entry((r, c)).or_default();
+                    for k in 0..9 {
+                        h[k] += out[13 + 9 * (4 * i + j) + k];
+                    }
+                }
+            }
+        };
+        use crate::energy::term::NO_DOF;
+        let mut out = vec![0.0; element_stride(4)];
+        let mut merged: Sums = Default::default();
+        let n_pairs = contact.pairs.len();
+        for e in 0..contact.num_elements() {
+            contact.evaluate_element(e, &trial, EvalMode::ExactHessian, &mut out);
+            let nodes = if e < n_pairs {
+                contact.pairs[e].nodes
+            } else {
+                contact.friction_elements[contact.lone_friction[e - n_pairs] as usize].nodes
+            };
+            add(&mut merged, &nodes, &out);
+        }
+        let mut apart: Sums = Default::default();
+        for e in 0..n_pairs {
+            contact.evaluate_contact_element(e, &trial, EvalMode::ExactHessian, false, &mut out);
+            add(&mut apart, &contact.pairs[e].nodes, &out);
+        }
+        for f in &contact.friction_elements {
+            let mut d = HyperDual::<4>::constant(0.0);
+            f.derivatives(&super::Contact::stencil_x(&f.nodes, &moved), &mut d);
+            write_deformable_element(&d, trial.dt, &mut out);
+            add(&mut apart, &f.nodes, &out);
+        }
+        let scale = apart.1.values().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+        assert!(scale > 0.0);
+        assert_eq!(merged.0.len(), apart.0.len());
+        assert_eq!(merged.1.len(), apart.1.len());
+        for (key, h) in &apart.1 {
+            let m = merged.1[key];
+            for k in 0..9 {
+                assert!(
+                    (m[k] - h[k]).abs() <= 1e-12 * scale,
+                    "block {key:?}: {} vs {}",
+                    m[k],
+                    h[k]
+                );
+            }
+        }
+        let gscale = apart.0.values().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+        for (node, g) in &apart.0 {
+            for k in 0..3 {
+                assert!((merged.0[node][k] - g[k]).abs() <= 1e-12 * gscale);
+            }
+        }
+    });
+}
