@@ -136,14 +136,21 @@ impl EnergyTerm for Contact {
     }
     fn prepare_evaluation(&mut self, state: &EvalState) {
         let pairs = self.detect(state.x);
-        if pairs
-            .iter()
-            .map(|p| (p.kind, p.nodes))
-            .ne(self.pairs.iter().map(|p| (p.kind, p.nodes)))
-        {
+        // One pass over both lists: whether the stencils (the friction matching's input) and
+        // the kinds (with them, the layout's) stayed.
+        let (same_stencils, same_kinds) = if pairs.len() == self.pairs.len() {
+            pairs
+                .iter()
+                .zip(&self.pairs)
+                .fold((true, true), |(nodes, kinds), (p, q)| {
+                    (nodes && p.nodes == q.nodes, kinds && p.kind == q.kind)
+                })
+        } else {
+            (false, false)
+        };
+        if !(same_stencils && same_kinds) {
             self.version += 1;
         }
-        let same_stencils = pairs.iter().map(|p| p.nodes).eq(self.pairs.iter().map(|p| p.nodes));
         self.pairs = pairs;
         self.stats.active_pairs = self.pairs.len();
         if !same_stencils {

@@ -2,6 +2,7 @@
 
 use crate::energy::kinematics::BodyPose;
 use crate::energy::EnergyTerm;
+use crate::presets::ObstacleHandle;
 use crate::state::{dof_blocks, EvalState};
 use crate::{Settings, Simulation};
 use nalgebra::{UnitQuaternion, Vector3};
@@ -228,6 +229,20 @@ fn wavy_grid(n: usize, size: f64, z: f64, phase: f64) -> (Vec<Vector3<f64>>, Vec
     (x, t)
 }
 
+/// Two `n × n` wavy grids `size` wide, prescribed, 1.2 mm apart with the upper one shifted
+/// (1 mm contact thickness: their vertices, edges and triangles all within d̂); the handles and
+/// the lower grid's node count (its nodes come first).
+fn stacked_wavy_grids(n: usize, size: f64) -> (Simulation, ObstacleHandle, ObstacleHandle, usize) {
+    let mut settings = Settings::default();
+    settings.contact.default_thickness_m = Some(1e-3);
+    let mut sim = Simulation::new(settings).unwrap();
+    let (xa, ta) = wavy_grid(n, size, 0.0, 0.0);
+    let (xb, tb) = wavy_grid(n, size, 1.2e-3, 1.0);
+    let a = sim.add_prescribed_surface("a", &xa, &ta, 1e-3, 1e4).unwrap();
+    let b = sim.add_prescribed_surface("b", &xb, &tb, 1e-3, 1e4).unwrap();
+    (sim, a, b, xa.len())
+}
+
 /// Candidates that serve again are pruned of the pairs that can neither become active nor bound
 /// a step while they cover the state (a long edge's box spans a whole mesh), and the pairs and
 /// CCD bounds they give stay those of the full list and of a fresh broad phase.
@@ -314,13 +329,7 @@ fn pruned_candidates_give_the_same_pairs_and_ccd_bounds() {
 /// cached across steps are dropped when a thickness changes.
 #[test]
 fn pairs_come_in_one_order_from_any_covering_candidates() {
-    let mut settings = Settings::default();
-    settings.contact.default_thickness_m = Some(1e-3);
-    let mut sim = Simulation::new(settings).unwrap();
-    let (xa, ta) = wavy_grid(12, 0.3, 0.0, 0.0);
-    let (xb, tb) = wavy_grid(12, 0.3, 1.2e-3, 1.0);
-    sim.add_prescribed_surface("a", &xa, &ta, 1e-3, 1e4).unwrap();
-    sim.add_prescribed_surface("b", &xb, &tb, 1e-3, 1e4).unwrap();
+    let (mut sim, ..) = stacked_wavy_grids(12, 0.3);
     let x = sim.nodes.x.clone();
     let key = |pairs: &[super::ContactPair]| pairs.iter().map(|p| (p.kind, p.nodes)).collect::<Vec<_>>();
 
@@ -357,6 +366,7 @@ fn pairs_come_in_one_order_from_any_covering_candidates() {
     // A thicker object: the next step's detection finds the pairs of its larger d̂ (the
     // candidates cached at the smaller one would miss them).
     let mut sim = Simulation::new(sim.settings.clone()).unwrap();
+    let (xa, ta) = wavy_grid(12, 0.3, 0.0, 0.0);
     sim.add_prescribed_surface("a", &xa, &ta, 1e-3, 1e4).unwrap();
     let (xb, tb) = wavy_grid(12, 0.3, 4.5e-3, 1.0);
     let b = sim.add_prescribed_surface("b", &xb, &tb, 1e-3, 1e4).unwrap();
@@ -440,13 +450,7 @@ fn friction_elements_are_assembled_once_with_their_pair_or_alone() {
     use crate::energy::term::element_stride;
     use crate::energy::{EvalMode, HyperDual, Scalar};
     use std::collections::HashMap;
-    let mut settings = Settings::default();
-    settings.contact.default_thickness_m = Some(1e-3);
-    let mut sim = Simulation::new(settings).unwrap();
-    let (xa, ta) = wavy_grid(8, 0.2, 0.0, 0.0);
-    let (xb, tb) = wavy_grid(8, 0.2, 1.2e-3, 1.0);
-    let a = sim.add_prescribed_surface("a", &xa, &ta, 1e-3, 1e4).unwrap();
-    let b = sim.add_prescribed_surface("b", &xb, &tb, 1e-3, 1e4).unwrap();
+    let (mut sim, a, b, lower_nodes) = stacked_wavy_grids(8, 0.2);
     sim.contact.set_friction(a.contact, b.contact, 0.5).unwrap();
     let masses_kg = vec![1e-3; sim.nodes.len()];
     sim.contact.initialize_stiffness(&masses_kg, 0.01, 9.81);
@@ -458,7 +462,7 @@ fn friction_elements_are_assembled_once_with_their_pair_or_alone() {
         .iter()
         .enumerate()
         .map(|(i, p)| {
-            if i >= xa.len() {
+            if i >= lower_nodes {
                 p + Vector3::new(-1.2e-2, 0.0, -3e-4) * f64::from(p.x < 0.1)
             } else {
                 *p
