@@ -32,8 +32,13 @@ use crate::state::{BodyArrays, NodeArrays};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
-/// The format version this build writes and reads (3: Newton's initial-guess factor saved).
-pub const CHECKPOINT_FORMAT_VERSION: u32 = 3;
+/// The format version this build writes (3: Newton's initial-guess factor saved; 4: the
+/// multigrid hierarchy's interpolation). It reads 3 too.
+pub const CHECKPOINT_FORMAT_VERSION: u32 = 4;
+
+/// The oldest format version this build reads: a version-3 state is a version-4 state without
+/// its last field, the kept preconditioner (none).
+const OLDEST_READ_FORMAT_VERSION: u32 = 3;
 
 /// First bytes of every checkpoint file.
 const MAGIC: [u8; 8] = *b"STARKCKP";
@@ -99,6 +104,9 @@ pub(crate) struct SimulationState {
     pub frame_times_s: Vec<f64>,
     /// Each term's name and saved state, in the simulation's term order.
     pub terms: Vec<(String, Vec<u8>)>,
+    /// What the linear solver keeps from step to step (a multigrid hierarchy's interpolation),
+    /// postcard-encoded; empty when nothing (format 3 had no such field).
+    pub kept_preconditioner: Vec<u8>,
 }
 
 /// A value as MessagePack with field names inside the postcard stream (MessagePack keeps
@@ -213,10 +221,12 @@ fn parse_header<'a>(path: &Path, bytes: &'a [u8]) -> Result<(CheckpointHeader, &
     // may have changed.
     let (version, _): (u32, _) = postcard::take_from_bytes(&bytes[MAGIC.len()..])
         .map_err(|_| err(path, "the file is truncated inside its header"))?;
-    if version != CHECKPOINT_FORMAT_VERSION {
+    if !(OLDEST_READ_FORMAT_VERSION..=CHECKPOINT_FORMAT_VERSION).contains(&version) {
         return Err(err(
             path,
-            format!("format version {version}; this build reads version {CHECKPOINT_FORMAT_VERSION}"),
+            format!(
+                "format version {version}; this build reads versions {OLDEST_READ_FORMAT_VERSION} to {CHECKPOINT_FORMAT_VERSION}"
+            ),
         ));
     }
     let (header, rest): (CheckpointHeader, _) =
@@ -260,8 +270,14 @@ pub(crate) fn read(path: &Path, scene_hash: u64, scene: &str) -> Result<(Checkpo
             ),
         ));
     }
+    // Format 3 ends before the kept preconditioner: an empty one (postcard: a zero length).
+    let body: std::borrow::Cow<[u8]> = if header.format_version == 3 {
+        [body, &[0u8][..]].concat().into()
+    } else {
+        body.into()
+    };
     let state: SimulationState =
-        postcard::from_bytes(body).map_err(|e| err(path, format!("the state does not decode: {e}")))?;
+        postcard::from_bytes(&body).map_err(|e| err(path, format!("the state does not decode: {e}")))?;
     Ok((header, state))
 }
 
@@ -302,5 +318,53 @@ mod tests {
         })
         .unwrap();
         assert_eq!(postcard::from_bytes::<Holder>(&file).unwrap().settings, settings);
+    }
+
+    /// A format-3 file (no kept preconditioner) reads as a current one with none; a current one
+    /// round-trips its kept preconditioner.
+    #[test]
+    fn format_3_files_read_with_no_kept_preconditioner() {
+        let dir = tempfile::tempdir().unwrap();
+        let state = |kept: Vec<u8>| SimulationState {
+            nodes: NodeArrays::default(),
+            bodies: BodyArrays::default(),
+            settings: Settings::default(),
+            time_s: 0.25,
+            dt_s: 0.01,
+            guess_scale: 1.0,
+            summary: RunSummary::default(),
+            frames_written: 3,
+            next_frame_time_s: 0.3,
+            frame_times_s: vec![0.0, 0.1, 0.2],
+            terms: vec![("gravity".into(), vec![1, 2, 3])],
+            kept_preconditioner: kept,
+        };
+        let head = || header(7, "probe", SceneOrigin::Program, Path::new("out"), 0.25, 25);
+
+        let current = dir.path().join("current.ckpt");
+        write(&current, head(), &state(vec![9, 8, 7])).unwrap();
+        let (h, back) = read(&current, 7, "probe").unwrap();
+        assert_eq!(h.format_version, CHECKPOINT_FORMAT_VERSION);
+        assert_eq!(back.kept_preconditioner, vec![9, 8, 7]);
+
+        // Version 3: the same state without its last field (an empty one encodes as one 0 byte).
+        let body = postcard::to_allocvec(&state(Vec::new())).unwrap();
+        assert_eq!(body.last(), Some(&0));
+        let body = &body[..body.len() - 1];
+        let mut old = head();
+        old.format_version = 3;
+        old.state_len = body.len() as u64;
+        let mut hash = Fnv::default();
+        hash.bytes(body);
+        old.state_checksum = hash.finish();
+        let mut bytes = postcard::to_allocvec(&old).unwrap();
+        bytes.extend_from_slice(body);
+        let older = dir.path().join("older.ckpt");
+        std::fs::write(&older, bytes).unwrap();
+        let (h, back) = read(&older, 7, "probe").unwrap();
+        assert_eq!(h.format_version, 3);
+        assert!(back.kept_preconditioner.is_empty());
+        assert_eq!(back.terms, vec![("gravity".to_string(), vec![1, 2, 3])]);
+        assert_eq!(back.frame_times_s, vec![0.0, 0.1, 0.2]);
     }
 }

@@ -180,6 +180,7 @@ impl Simulation {
             next_frame_time_s: self.output.next_frame_time,
             frame_times_s: self.output.frame_times.clone(),
             terms,
+            kept_preconditioner: self.newton.save_kept_preconditioner(),
         };
         let header = crate::io::checkpoint::header(
             self.scene_hash(),
@@ -234,6 +235,9 @@ impl Simulation {
                 .map_err(|e| fail(format!("term '{name}': {e}")))?;
         }
         drop(terms);
+        self.newton
+            .restore_kept_preconditioner(&state.kept_preconditioner)
+            .map_err(fail)?;
         let keep_threads = self.settings.threads;
         let keep_output = self.settings.output.clone();
         self.settings = state.settings;

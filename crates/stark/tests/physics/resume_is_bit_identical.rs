@@ -235,8 +235,7 @@ fn wrong_scene_truncated_file_and_other_version_are_refused() {
     std::fs::write(&other_version, &next).unwrap();
     let e = fresh.restore_checkpoint(&other_version).unwrap_err().to_string();
     assert!(
-        e.contains(&format!("format version {}", this_version + 1))
-            && e.contains(&format!("reads version {this_version}")),
+        e.contains(&format!("format version {}", this_version + 1)) && e.contains(&format!("to {this_version}")),
         "{e}"
     );
 

@@ -34,6 +34,7 @@ use super::block_sparse::{dot, Block, BlockSparseMatrix, UpperScratch, UpperTria
 use super::pcg::block_jacobi;
 use nalgebra::DMatrix;
 use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
 
 /// Blocks `i ≠ j` are strongly coupled when `‖A_ij‖ ≥ θ √(‖A_ii‖ ‖A_jj‖)` (Frobenius norms): the
 /// classical threshold of smoothed aggregation for elasticity.
@@ -276,7 +277,7 @@ fn residual_into32(a: &LevelMatrix32, x: &[f64], b: &[f64], r: &mut [f64], scrat
 }
 
 /// A rectangular matrix of 3×3 blocks, rows compressed (the prolongator and its transpose).
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
 struct BlockRows {
     n_cols: usize,
     row_start: Vec<usize>,
@@ -477,6 +478,84 @@ where
             acc.drain_into(out);
         });
     })
+}
+
+/// The values of `L R` into `out`, whose pattern holds every block of it in columns
+/// `first_column(r)..` of each row `r` (the pattern of an earlier [`product_from`] of the same
+/// patterns).
+fn product_values<'a, F, I>(
+    out: &mut BlockRows,
+    right: &BlockRows,
+    left_row: F,
+    first_column: impl Fn(usize) -> usize + Sync,
+) where
+    F: Fn(usize) -> I + Sync,
+    I: Iterator<Item = (usize, &'a Block)>,
+{
+    let n_rows = out.n_rows();
+    let n_cols = right.n_cols;
+    let row_start = &out.row_start;
+    let cols = &out.cols;
+    // Rows in fixed chunks of `ROWS_PER_TASK`: each chunk's values are one slice of `out.values`.
+    let mut chunks: Vec<&mut [Block]> = Vec::with_capacity(n_rows.div_ceil(ROWS_PER_TASK));
+    let mut rest = out.values.as_mut_slice();
+    for chunk in 0..n_rows.div_ceil(ROWS_PER_TASK) {
+        let rows = chunk * ROWS_PER_TASK..((chunk + 1) * ROWS_PER_TASK).min(n_rows);
+        let (here, tail) = rest.split_at_mut(row_start[rows.end] - row_start[rows.start]);
+        chunks.push(here);
+        rest = tail;
+    }
+    chunks.into_par_iter().enumerate().for_each(|(chunk, values)| {
+        thread_local! {
+            static SCRATCH: std::cell::RefCell<(Vec<u32>, Vec<PaddedBlock>)> =
+                const { std::cell::RefCell::new((Vec::new(), Vec::new())) };
+        }
+        SCRATCH.with(|scratch| {
+            let (slot, sums) = &mut *scratch.borrow_mut();
+            if slot.len() != n_cols {
+                *slot = vec![u32::MAX; n_cols];
+            }
+            let first_row = chunk * ROWS_PER_TASK;
+            let base = row_start[first_row];
+            for r in first_row..((chunk + 1) * ROWS_PER_TASK).min(n_rows) {
+                let span = row_start[r]..row_start[r + 1];
+                sums.clear();
+                sums.resize(span.len(), PaddedBlock::default());
+                for (k, &c) in cols[span.clone()].iter().enumerate() {
+                    slot[c as usize] = k as u32;
+                }
+                let first = first_column(r);
+                for (k, l) in left_row(r) {
+                    for (c, rb) in right.row(k) {
+                        if c >= first {
+                            multiply_add(&mut sums[slot[c] as usize], l, rb);
+                        }
+                    }
+                }
+                for (k, &c) in cols[span.clone()].iter().enumerate() {
+                    slot[c as usize] = u32::MAX;
+                    values[span.start - base + k] = sums[k].block();
+                }
+            }
+        });
+    });
+}
+
+/// The values of the symmetric `matrix` (the pattern [`mirrored`] made of an `upper` of this
+/// pattern) from its upper block triangle `upper`.
+fn mirror_values(upper: &BlockRows, matrix: &mut BlockSparseMatrix) {
+    let n = upper.n_rows();
+    let mut next_lower = matrix.row_start[..n].to_vec();
+    for r in 0..n {
+        let d = matrix.diagonal[r];
+        for (k, (c, b)) in upper.row(r).enumerate() {
+            matrix.values[d + k] = *b;
+            if c != r {
+                matrix.values[next_lower[c]] = transpose(b);
+                next_lower[c] += 1;
+            }
+        }
+    }
 }
 
 /// `λ_max(D⁻¹A)` from below, by power iteration from a fixed start (the Rayleigh quotient of the
@@ -699,6 +778,9 @@ struct Level {
     matrix32: LevelMatrix32,
     prolongator32: Vec<Block32>,
     restriction32: Vec<Block32>,
+    /// The Galerkin product's intermediates, whose patterns serve again for a later fine matrix
+    /// of the same pattern.
+    products: GalerkinProducts,
 }
 
 /// The smoother's data on one level (finest included).
@@ -759,6 +841,13 @@ pub struct Amg {
     top: Vec<f64>,
     /// The finest matrix (the one last built from or refitted to) as the cycle reads it.
     finest32: LevelMatrix32,
+}
+
+/// The part of a hierarchy that [`Amg::refresh_levels`] keeps (saved in checkpoints).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Interpolation {
+    prolongators: Vec<BlockRows>,
+    top: Vec<f64>,
 }
 
 /// Statistics of a hierarchy (logs and tests).
@@ -848,6 +937,88 @@ impl Amg {
         let finest = &mut self.smoothers[0];
         single_into(&inv_diag, &mut finest.inv_diag32);
         finest.lambda_max = lambda_max;
+    }
+
+    /// Keep the interpolation (aggregates and prolongators), and recompute everything that
+    /// depends on the matrix from `a` (a later Hessian of the same unknowns): every level's
+    /// Galerkin matrix, smoother and the coarsest factorisation.
+    pub fn refresh_levels(&mut self, a: &BlockSparseMatrix) {
+        self.refresh_finest(a);
+        for l in 0..self.levels.len() {
+            let (above, below) = self.levels.split_at_mut(l);
+            let fine = above.last().map_or(a, |lv| &lv.matrix);
+            let level = &mut below[0];
+            regalerkin(
+                fine,
+                &level.prolongator,
+                &level.restriction,
+                &mut level.products,
+                &mut level.matrix,
+            );
+            level.matrix32.refill(&level.matrix);
+            let inv_diag = block_jacobi(&level.matrix);
+            let lambda_max = SPECTRAL_SAFETY * spectral_radius(&level.matrix32, &inv_diag, &mut self.work[l + 1]);
+            self.smoothers[l + 1] = Smoother::new(&inv_diag, lambda_max);
+        }
+        self.coarsest = coarsest_solve(self.levels.last().map_or(a, |l| &l.matrix));
+    }
+
+    /// What [`Amg::refresh_levels`] keeps: the prolongators, and the finest level's last power
+    /// iterate (where the next estimate of its smoother's interval starts).
+    pub fn interpolation(&self) -> Interpolation {
+        Interpolation {
+            prolongators: self.levels.iter().map(|l| l.prolongator.clone()).collect(),
+            top: self.top.clone(),
+        }
+    }
+
+    /// A hierarchy of `interpolation` whose matrices are not yet computed: it serves only after
+    /// [`Amg::refresh_levels`], which computes them from a matrix exactly as for the hierarchy
+    /// the interpolation came from (the Galerkin products' values do not depend on whether
+    /// their patterns were kept).
+    pub fn from_interpolation(interpolation: Interpolation) -> Result<Amg, String> {
+        let Interpolation { prolongators, top } = interpolation;
+        let mut fine_blocks = top.len() / 3;
+        for (l, p) in prolongators.iter().enumerate() {
+            let consistent = p.row_start.len() == fine_blocks + 1
+                && p.row_start.first() == Some(&0)
+                && p.row_start.windows(2).all(|w| w[0] <= w[1])
+                && p.row_start.last() == Some(&p.cols.len())
+                && p.values.len() == p.cols.len()
+                && p.cols.iter().all(|&c| (c as usize) < p.n_cols);
+            if !consistent {
+                return Err(format!(
+                    "the multigrid prolongator of level {l} does not fit the level above"
+                ));
+            }
+            fine_blocks = p.n_cols;
+        }
+        let mut work = vec![Work::new(top.len())];
+        let levels = prolongators
+            .into_iter()
+            .map(|prolongator| {
+                work.push(Work::new(3 * prolongator.n_cols));
+                let restriction = prolongator.transposed();
+                Level {
+                    matrix: BlockSparseMatrix::default(),
+                    matrix32: LevelMatrix32::default(),
+                    prolongator32: single(&prolongator.values),
+                    restriction32: single(&restriction.values),
+                    prolongator,
+                    restriction,
+                    products: GalerkinProducts::default(),
+                }
+            })
+            .collect::<Vec<_>>();
+        let smoothers = (0..=levels.len()).map(|_| Smoother::new(&[], 0.0)).collect();
+        Ok(Amg {
+            levels,
+            smoothers,
+            coarsest: CoarsestSolve::PseudoInverse(DMatrix::zeros(0, 0)),
+            work,
+            top,
+            finest32: LevelMatrix32::default(),
+        })
     }
 
     /// Blocks and stored blocks per level.
@@ -1015,33 +1186,7 @@ fn coarsen(
         out[start..].sort_unstable_by_key(|e| e.0);
     });
     let restriction = prolongator.transposed();
-    // A P, then Pᵀ (A P).
-    let ap = product(a.n_blocks, &prolongator, |r| {
-        (a.row_start[r]..a.row_start[r + 1]).map(|idx| (a.cols[idx] as usize, &a.values[idx]))
-    });
-    // Its upper block triangle, and the lower one as the upper's transpose (exactly symmetric,
-    // half the products).
-    let upper = product_from(n_coarse, &ap, |r| restriction.row(r), |r| r);
-    let mut matrix = mirrored(&upper);
-    // Coarse unknowns without a mode are decoupled: a unit diagonal (their right-hand side is
-    // always zero, so they stay zero).
-    let mean_diagonal = {
-        let d: Vec<f64> = matrix
-            .diagonal
-            .iter()
-            .flat_map(|&i| [0, 4, 8].map(|k| matrix.values[i][k]))
-            .collect();
-        let positive: Vec<f64> = d.into_iter().filter(|&x| x > 0.0).collect();
-        positive.iter().sum::<f64>() / positive.len().max(1) as f64
-    };
-    for r in 0..n_coarse {
-        let i = matrix.diagonal[r];
-        for k in [0, 4, 8] {
-            if matrix.values[i][k] <= 1e-14 * mean_diagonal {
-                matrix.values[i][k] = mean_diagonal.max(1.0e-300);
-            }
-        }
-    }
+    let (matrix, products) = galerkin(a, &prolongator, &restriction);
     let coarse_space = NearNullSpace {
         columns,
         rows: coarse_rows,
@@ -1056,9 +1201,97 @@ fn coarsen(
             matrix,
             prolongator,
             restriction,
+            products,
         },
         coarse_space,
     )
+}
+
+/// The Galerkin product's intermediates: `A P`, the upper block triangle of `Pᵀ (A P)`, and the
+/// pattern of the fine matrix `A` they were computed for.
+#[derive(Default)]
+struct GalerkinProducts {
+    ap: BlockRows,
+    upper: BlockRows,
+    fine_row_start: Vec<usize>,
+    fine_cols: Vec<u32>,
+}
+
+impl GalerkinProducts {
+    /// `a` has the pattern these products were computed for.
+    fn fits(&self, a: &BlockSparseMatrix) -> bool {
+        self.fine_row_start == a.row_start && self.fine_cols == a.cols
+    }
+}
+
+/// The Galerkin coarse matrix `Pᵀ A P` (`restriction` is `Pᵀ`), and the products on the way.
+fn galerkin(
+    a: &BlockSparseMatrix,
+    prolongator: &BlockRows,
+    restriction: &BlockRows,
+) -> (BlockSparseMatrix, GalerkinProducts) {
+    let n_coarse = prolongator.n_cols;
+    // A P, then Pᵀ (A P).
+    let ap = product(a.n_blocks, prolongator, |r| fine_row(a, r));
+    // Its upper block triangle, and the lower one as the upper's transpose (exactly symmetric,
+    // half the products).
+    let upper = product_from(n_coarse, &ap, |r| restriction.row(r), |r| r);
+    let mut matrix = mirrored(&upper);
+    unit_diagonal_where_decoupled(&mut matrix);
+    let products = GalerkinProducts {
+        ap,
+        upper,
+        fine_row_start: a.row_start.clone(),
+        fine_cols: a.cols.clone(),
+    };
+    (matrix, products)
+}
+
+/// [`galerkin`] again for a later `a` into `matrix` (the coarse matrix of the last one): when `a`
+/// has the last one's pattern, the products' patterns are kept and only their values are
+/// computed (no accumulator bookkeeping, no sorting, no allocation).
+fn regalerkin(
+    a: &BlockSparseMatrix,
+    prolongator: &BlockRows,
+    restriction: &BlockRows,
+    products: &mut GalerkinProducts,
+    matrix: &mut BlockSparseMatrix,
+) {
+    if !products.fits(a) {
+        (*matrix, *products) = galerkin(a, prolongator, restriction);
+        return;
+    }
+    product_values(&mut products.ap, prolongator, |r| fine_row(a, r), |_| 0);
+    product_values(&mut products.upper, &products.ap, |r| restriction.row(r), |r| r);
+    mirror_values(&products.upper, matrix);
+    unit_diagonal_where_decoupled(matrix);
+}
+
+/// Row `r` of `a` as (column, block).
+fn fine_row(a: &BlockSparseMatrix, r: usize) -> impl Iterator<Item = (usize, &Block)> {
+    (a.row_start[r]..a.row_start[r + 1]).map(|idx| (a.cols[idx] as usize, &a.values[idx]))
+}
+
+/// Coarse unknowns without a mode (a zero column of `P`) get a unit diagonal: their right-hand
+/// side is always zero, so they stay zero.
+fn unit_diagonal_where_decoupled(matrix: &mut BlockSparseMatrix) {
+    let mean_diagonal = {
+        let d: Vec<f64> = matrix
+            .diagonal
+            .iter()
+            .flat_map(|&i| [0, 4, 8].map(|k| matrix.values[i][k]))
+            .collect();
+        let positive: Vec<f64> = d.into_iter().filter(|&x| x > 0.0).collect();
+        positive.iter().sum::<f64>() / positive.len().max(1) as f64
+    };
+    for r in 0..matrix.n_blocks {
+        let i = matrix.diagonal[r];
+        for k in [0, 4, 8] {
+            if matrix.values[i][k] <= 1e-14 * mean_diagonal {
+                matrix.values[i][k] = mean_diagonal.max(1.0e-300);
+            }
+        }
+    }
 }
 
 /// The symmetric matrix whose upper block triangle is `upper` (each row's columns from its
