@@ -16,7 +16,8 @@ pub enum LinearSolver {
     /// count grows with the mesh's resolution).
     Pcg,
     /// Conjugate gradients preconditioned by smoothed-aggregation algebraic multigrid (one
-    /// V-cycle; the near-null space the rigid motions of the unknowns; one hierarchy per step):
+    /// V-cycle; the near-null space the rigid motions of the unknowns; a hierarchy's
+    /// interpolation serves four steps, its levels recomputed for each step's Hessian):
     /// iteration counts nearly independent of resolution, for large meshes (a 256² cloth, 200k
     /// unknowns: 15 CG iterations per Newton iteration instead of 466, 2.6× faster; a 128² one,
     /// 50k unknowns: 1.2–2.3×; below ~50k unknowns block-Jacobi CG is faster).

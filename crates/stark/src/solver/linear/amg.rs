@@ -26,6 +26,11 @@
 //! hierarchy's set-up (the Galerkin products) and the V-cycle's passes over memory make it pay
 //! only on the largest meshes.
 //!
+//! A hierarchy's interpolation (aggregates and prolongators) serves later matrices of the same
+//! unknowns: [`Amg::refresh_levels`] recomputes the levels' Galerkin matrices on the patterns
+//! kept from the last time (values only: on a 128² cloth ~30 ms against ~90 for a new hierarchy)
+//! and their smoothers; the Newton solver decides when ([`crate::solver::newton`]).
+//!
 //! Everything is built from the matrix and the unknowns' positions (rigid-body blocks included:
 //! they join aggregates where the coupling is strong, and are left to the smoother where it is
 //! weak), deterministic and independent of the thread count (rows are computed independently).
