@@ -55,6 +55,9 @@ const CHUNK: usize = 128;
 /// [`CHUNK`].
 const BANDS_PER_TERM: usize = 16;
 
+/// Elements ahead whose matrix blocks are prefetched (2, 4, 8 and 16 alike on a 128² cloth).
+const PREFETCH_AHEAD: usize = 4;
+
 /// Layout of one term.
 #[derive(Default)]
 struct TermLayout {
@@ -477,11 +480,36 @@ impl Assembler {
                     }
                 }
             };
+            // The matrix blocks of an element a few ahead, requested while this one is evaluated:
+            // its rows are scattered over the matrix (a grid's next row of nodes is a matrix row
+            // 130 rows on), and once the matrix leaves the caches each block added waits for
+            // memory (a 128² cloth: evaluation −32 to −35%, the folded towel's −11 to −14%).
+            let prefetch = |e: usize| {
+                #[cfg(target_arch = "x86_64")]
+                // SAFETY: a prefetch is a hint that never faults; the addresses are those of the
+                // element's blocks in the matrix's values (a block's 72 bytes span two lines).
+                unsafe {
+                    use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+                    for &slot in &slots[e * m * m..(e + 1) * m * m] {
+                        if slot != NO_SLOT {
+                            let p = values_ptr.ptr().add(slot as usize) as *const i8;
+                            _mm_prefetch(p, _MM_HINT_T0);
+                            _mm_prefetch(p.add(64), _MM_HINT_T0);
+                        }
+                    }
+                }
+                #[cfg(not(target_arch = "x86_64"))]
+                let _ = e;
+            };
             for color in &layout.colors {
                 color.par_iter().for_each_init(
                     || vec![0.0; stride],
                     |buf, &(start, end)| {
                         for e in start as usize..end as usize {
+                            let ahead = e + PREFETCH_AHEAD;
+                            if ahead < end as usize {
+                                prefetch(ahead);
+                            }
                             term.evaluate_element(e, state, mode, buf);
                             add(e, buf);
                         }
@@ -503,6 +531,9 @@ impl Assembler {
                         term.evaluate_element(first + k, state, mode, out);
                     });
                     for (k, out) in outs.chunks_exact(stride).enumerate() {
+                        if first + k + PREFETCH_AHEAD < last {
+                            prefetch(first + k + PREFETCH_AHEAD);
+                        }
                         add(first + k, out);
                     }
                     first = last;
