@@ -1608,6 +1608,66 @@ mod tests {
         }
     }
 
+    /// Levels recomputed for a later matrix of the same pattern are its Galerkin products with
+    /// the kept prolongators (the kept patterns' values equal a product computed from scratch, to
+    /// the bit), and a hierarchy restored from the saved interpolation computes the same
+    /// levels and the same preconditioned vectors.
+    #[test]
+    fn refreshed_levels_are_the_new_matrix_galerkin_products() {
+        let m = 24;
+        let space = || NearNullSpace::rigid_motions(&grid_positions(m));
+        let first = grid(m, 1.0, 1e-3);
+        // Same pattern, other values (stiffness ×3, mass ×2: not a multiple of the first).
+        let later = grid(m, 3.0, 2e-3);
+        let mut kept = Amg::with_near_null_space(&first, space());
+        assert!(kept.levels.len() >= 2, "a hierarchy of several levels");
+        let saved = postcard::to_allocvec(&kept.interpolation()).unwrap();
+        let mut restored = Amg::from_interpolation(postcard::from_bytes(&saved).unwrap()).unwrap();
+        kept.refresh_levels(&later);
+        restored.refresh_levels(&later);
+        let mut fine = &later;
+        for (k, r) in kept.levels.iter().zip(&restored.levels) {
+            let (expected, _) = galerkin(fine, &k.prolongator, &k.restriction);
+            for got in [&k.matrix, &r.matrix] {
+                assert_eq!(got.row_start, expected.row_start);
+                assert_eq!(got.cols, expected.cols);
+                let bits = |m: &BlockSparseMatrix| m.values.iter().flatten().map(|x| x.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(got), bits(&expected));
+            }
+            fine = &k.matrix;
+        }
+        let b = rhs(later.dim());
+        let (mut zk, mut zr) = (vec![0.0; b.len()], vec![0.0; b.len()]);
+        kept.precondition(&later, &b, &mut zk);
+        restored.precondition(&later, &b, &mut zr);
+        assert_eq!(zk, zr);
+        // And it preconditions the later matrix as a new hierarchy does (iterations within 2).
+        let fresh = Amg::with_near_null_space(&later, space());
+        let iterations = |mut amg: Amg| {
+            let mut x = vec![0.0; b.len()];
+            let info = pcg::solve_with_product(
+                &mut |p, ap| {
+                    later.mul_vec(p, ap);
+                    dot(p, ap)
+                },
+                &b,
+                &mut x,
+                1e-8 * dot(&b, &b).sqrt(),
+                200,
+                &mut |r, z| amg.precondition(&later, r, z),
+            );
+            assert!(info.converged);
+            info.iterations
+        };
+        let (with_kept, with_fresh) = (iterations(kept), iterations(fresh));
+        assert!(with_kept <= with_fresh + 2, "kept {with_kept}, new {with_fresh}");
+        // A bad interpolation is refused with a message.
+        let mut wrong = Amg::with_near_null_space(&first, space()).interpolation();
+        wrong.top.pop();
+        let refused = Amg::from_interpolation(wrong).err().expect("refused");
+        assert!(refused.contains("level 0"), "{refused}");
+    }
+
     #[test]
     fn the_spectral_radius_is_estimated_from_below_and_close() {
         let a = grid(16, 1.0, 1e-2);
