@@ -421,6 +421,13 @@ impl Assembler {
         self.rebuilds += 1;
     }
 
+    /// Make the layout (stencils, pattern, slots) of an assembly of `terms` at `state` without
+    /// evaluating anything: [`Assembler::matrix`]'s pattern and [`Assembler::pattern_id`] are
+    /// then the next [`Assembler::assemble`]'s.
+    pub fn prepare_layout(&mut self, terms: &[&dyn EnergyTerm], state: &EvalState, dofs: &DofMap) {
+        self.ensure_layout(terms, state, dofs);
+    }
+
     /// Evaluate all terms at `state`: returns the total energy and the scales of its rounding
     /// error (see [`Assembled`]), writes the gradient over the unknowns (length `3·dofs.len()`)
     /// and assembles the Hessian into [`Assembler::matrix`].

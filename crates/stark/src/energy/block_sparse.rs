@@ -75,6 +75,17 @@ impl BlockSparseMatrix {
             .collect()
     }
 
+    /// The pattern alone (no values): what an ordering or a symbolic analysis reads.
+    pub fn pattern_only(&self) -> BlockSparseMatrix {
+        BlockSparseMatrix {
+            n_blocks: self.n_blocks,
+            row_start: self.row_start.clone(),
+            cols: self.cols.clone(),
+            diagonal: self.diagonal.clone(),
+            values: Vec::new(),
+        }
+    }
+
     /// Number of scalar rows.
     pub fn dim(&self) -> usize {
         3 * self.n_blocks

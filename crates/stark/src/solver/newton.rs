@@ -43,7 +43,8 @@ pub enum ConvergedBy {
 pub struct PhaseTimes {
     /// Active-set updates (contact detection) before evaluations.
     pub prepare_s: f64,
-    /// Element evaluation, projection and assembly.
+    /// Element evaluation, projection and assembly (with the direct solver, the ordering and
+    /// symbolic analysis of a new pattern too: they run beside the assembly).
     pub evaluation_s: f64,
     /// Linear solves.
     pub linear_solve_s: f64,
@@ -217,6 +218,7 @@ fn residual_rounding_floor(matrix: &crate::solver::linear::BlockSparseMatrix, ex
 #[allow(clippy::too_many_arguments)]
 fn assemble_trial(
     assembler: &mut Assembler,
+    cholesky: Option<&mut CholeskySolver>,
     gradient: &mut [f64],
     terms: &[&mut dyn EnergyTerm],
     state: &EvalState,
@@ -230,11 +232,41 @@ fn assemble_trial(
     floor.get_or_insert_with(|| residual_rounding_floor(&assembler.matrix, extent_m, state.dt));
     let t = Instant::now();
     let shared: Vec<&dyn EnergyTerm> = terms.iter().map(|t| &**t as &dyn EnergyTerm).collect();
-    let done = assembler.assemble(&shared, state, dofs, mode, gradient);
+    let done = assemble_beside_analysis(assembler, cholesky, &shared, state, dofs, mode, gradient);
     let seconds = t.elapsed().as_secs_f64();
     times.evaluation_s += seconds;
     *in_line_search_s += seconds;
     done
+}
+
+/// Assemble all terms at `state`. With a Cholesky solver whose next solve must order or analyse
+/// the assembly's pattern first, that runs beside the assembly (it reads the pattern alone):
+/// serial work that a second thread absorbs (a folded towel's pattern grows about five times a
+/// step, ~30 ms of analysis each). At one thread the analysis simply comes first; its result is
+/// the same at any thread count.
+fn assemble_beside_analysis(
+    assembler: &mut Assembler,
+    cholesky: Option<&mut CholeskySolver>,
+    terms: &[&dyn EnergyTerm],
+    state: &EvalState,
+    dofs: &DofMap,
+    mode: EvalMode,
+    gradient: &mut [f64],
+) -> Assembled {
+    if let Some(cholesky) = cholesky {
+        assembler.prepare_layout(terms, state, dofs);
+        let id = assembler.pattern_id;
+        if cholesky.needs_analysis(id) {
+            let pattern = assembler.matrix.pattern_only();
+            let (_, done) = rayon::join(
+                // An analysis that fails here fails again in the solve, which reports it.
+                || cholesky.prepare(&pattern, id),
+                || assembler.assemble(terms, state, dofs, mode, gradient),
+            );
+            return done;
+        }
+    }
+    assembler.assemble(terms, state, dofs, mode, gradient)
 }
 
 fn total_energy(terms: &[&mut dyn EnergyTerm], state: &EvalState) -> f64 {
@@ -688,7 +720,15 @@ pub fn solve(
             };
             sums = match assembled.take() {
                 Some(done) => done,
-                None => ws.assembler.assemble(&shared, &state, &dofs, mode, &mut ws.gradient),
+                None => assemble_beside_analysis(
+                    &mut ws.assembler,
+                    (settings.linear_solver == LinearSolver::Cholesky).then_some(&mut ws.cholesky),
+                    &shared,
+                    &state,
+                    &dofs,
+                    mode,
+                    &mut ws.gradient,
+                ),
             };
             energy = sums.energy;
             report.times.evaluation_s += t1.elapsed().as_secs_f64();
@@ -955,6 +995,7 @@ pub fn solve(
                 tentative = true;
                 let done = assemble_trial(
                     &mut ws.assembler,
+                    (settings.linear_solver == LinearSolver::Cholesky).then_some(&mut ws.cholesky),
                     &mut ws.gradient,
                     terms,
                     &trial,
@@ -1005,6 +1046,7 @@ pub fn solve(
                     Some(done) => done,
                     None => assemble_trial(
                         &mut ws.assembler,
+                        (settings.linear_solver == LinearSolver::Cholesky).then_some(&mut ws.cholesky),
                         &mut ws.gradient,
                         terms,
                         &trial,

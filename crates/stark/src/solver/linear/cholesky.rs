@@ -146,7 +146,10 @@ fn upper_pattern(lower: &SymbolicSparseColMat<usize>) -> SymbolicSparseColMat<us
 /// A direct solver that re-analyses only when the block pattern changes.
 #[derive(Default)]
 pub struct CholeskySolver {
+    /// The analysis of the last factorisation (the reuses' preconditioner reads it).
     analysis: Option<Analysis>,
+    /// An analysis made ahead of the next factorisation ([`CholeskySolver::prepare`]).
+    pending: Option<Analysis>,
     values: Vec<f64>,
     /// The factor's values.
     factor: Vec<f64>,
@@ -363,6 +366,54 @@ impl CholeskySolver {
         self.analysis.as_ref().map_or(0, |an| an.symbolic_llt.len_val())
     }
 
+    /// Whether the next solve with a matrix of pattern `pattern_id` orders or analyses first
+    /// (then [`CholeskySolver::prepare`] can run beside the assembly of its values).
+    pub fn needs_analysis(&self, pattern_id: u64) -> bool {
+        self.fresh_ordering_next || !self.has_analysis(pattern_id)
+    }
+
+    /// An analysis of pattern `pattern_id` is at hand (the last factorisation's or a pending one).
+    fn has_analysis(&self, pattern_id: u64) -> bool {
+        [&self.analysis, &self.pending]
+            .iter()
+            .any(|an| an.as_ref().is_some_and(|an| an.pattern_id == pattern_id))
+    }
+
+    /// The ordering and symbolic analysis of `a`'s pattern (`pattern_id`; `a`'s values are not
+    /// read), unless one is at hand: what [`CholeskySolver::solve`] does first. The last
+    /// factorisation and its analysis stay usable ([`CholeskySolver::apply_last_factor`]).
+    pub fn prepare(&mut self, a: &BlockSparseMatrix, pattern_id: u64) -> Result<(), CholeskyError> {
+        // A step's first solve orders its pattern afresh, unless the ordering was made from this
+        // very pattern (METIS's result is a function of the pattern: the same ordering, and the
+        // same analysis if it was made with it, at no cost; a settled scene's contacts keep
+        // their pattern from step to step).
+        let mut fresh = false;
+        if std::mem::take(&mut self.fresh_ordering_next) && self.ordering_pattern_id != Some(pattern_id) {
+            self.order(a, pattern_id);
+            fresh = true;
+        }
+        if fresh || !self.has_analysis(pattern_id) {
+            let blocks = a.row_start.len() - 1;
+            if !fresh && self.ordering.as_ref().is_none_or(|o| o.len() != blocks) {
+                self.order(a, pattern_id);
+                fresh = true;
+            }
+            let previous_len = self.factor_len();
+            let mut analysis = Self::analyse(a, pattern_id, self.ordering.as_deref())?;
+            if !fresh && analysis.symbolic_llt.len_val() as f64 > REORDER_ABOVE_FILL_GROWTH * previous_len as f64 {
+                // The new couplings do not fit the old ordering (an obstacle's nodes that now
+                // touch a whole cloth, ordered early, fill everything in): order afresh.
+                self.order(a, pattern_id);
+                analysis = Self::analyse(a, pattern_id, self.ordering.as_deref())?;
+                fresh = true;
+            }
+            self.pending = Some(analysis);
+            self.analyses += 1;
+            self.fresh_orderings += usize::from(fresh);
+        }
+        Ok(())
+    }
+
     /// Solve `A x = b`. `pattern_id` identifies the sparsity pattern of `a`: the analysis is
     /// redone only when it changes. `definite`: the matrix is expected to be positive definite
     /// (its terms' definite or projected forms); a single-precision factorisation that fails then
@@ -384,35 +435,12 @@ impl CholeskySolver {
         self.factored = false;
         self.single.factored = false;
         self.refine_iterations = 0;
-        // A step's first solve orders its pattern afresh, unless the ordering was made from this
-        // very pattern (METIS's result is a function of the pattern: the same ordering, and the
-        // same analysis if it was made with it, at no cost; a settled scene's contacts keep
-        // their pattern from step to step).
-        let mut fresh = false;
-        if std::mem::take(&mut self.fresh_ordering_next) && self.ordering_pattern_id != Some(pattern_id) {
-            self.order(a, pattern_id);
-            fresh = true;
-        }
-        if fresh || self.analysis.as_ref().map(|an| an.pattern_id) != Some(pattern_id) {
-            let blocks = a.row_start.len() - 1;
-            if !fresh && self.ordering.as_ref().is_none_or(|o| o.len() != blocks) {
-                self.order(a, pattern_id);
-                fresh = true;
-            }
-            let previous_len = self.factor_len();
-            let mut analysis = Self::analyse(a, pattern_id, self.ordering.as_deref())?;
-            if !fresh && analysis.symbolic_llt.len_val() as f64 > REORDER_ABOVE_FILL_GROWTH * previous_len as f64 {
-                // The new couplings do not fit the old ordering (an obstacle's nodes that now
-                // touch a whole cloth, ordered early, fill everything in): order afresh.
-                self.order(a, pattern_id);
-                analysis = Self::analyse(a, pattern_id, self.ordering.as_deref())?;
-                fresh = true;
-            }
-            self.analysis = Some(analysis);
-            self.analyses += 1;
-            self.fresh_orderings += usize::from(fresh);
+        self.prepare(a, pattern_id)?;
+        if self.pending.as_ref().is_some_and(|an| an.pattern_id == pattern_id) {
+            self.analysis = self.pending.take();
         }
         let an = self.analysis.as_ref().expect("analysis present");
+        debug_assert_eq!(an.pattern_id, pattern_id);
         self.values.clear();
         self.values
             .extend(an.source.iter().map(|&(blk, e)| a.values[blk as usize][e as usize]));
@@ -737,6 +765,49 @@ mod tests {
         };
         assert!(solves_exactly(&mut resumed, &folded, 1));
         assert_eq!(resumed.factor, solver.factor, "the same factor, bit for bit");
+    }
+
+    /// An analysis made ahead of a solve (beside the assembly of the values) leaves the last
+    /// factorisation usable as a preconditioner, and the solve that uses it computes the same
+    /// bits as one that analysed the pattern itself.
+    #[test]
+    fn an_analysis_made_ahead_keeps_the_last_factor_and_gives_the_same_solve() {
+        let side = 20;
+        let flat = grid_matrix(side, 0, &[]);
+        let fold = |row: usize| {
+            let other = (row * side) as u32;
+            grid_matrix(side, 0, &(0..side as u32).map(|j| (j, other + j)).collect::<Vec<_>>())
+        };
+        let (folded, folded_more) = (fold(2), fold(3));
+        let b: Vec<f64> = (0..flat.dim()).map(|i| ((i * 29) % 13) as f64 - 6.0).collect();
+        let solve = |solver: &mut CholeskySolver, a: &BlockSparseMatrix, id: u64| {
+            let mut x = vec![0.0; b.len()];
+            solver.solve(a, id, &b, &mut x, true).unwrap();
+            x
+        };
+        let fresh = || CholeskySolver {
+            fresh_ordering_next: true,
+            ..Default::default()
+        };
+        let mut ahead = fresh();
+        solve(&mut ahead, &flat, 1);
+        let mut before = vec![0.0; b.len()];
+        assert!(ahead.apply_last_factor(&b, &mut before));
+        // A trial's pattern analysed and not solved, then the pattern solved next.
+        assert!(ahead.needs_analysis(3));
+        ahead.prepare(&folded_more.pattern_only(), 3).unwrap();
+        assert!(!ahead.needs_analysis(3));
+        ahead.prepare(&folded.pattern_only(), 2).unwrap();
+        assert!(!ahead.needs_analysis(2));
+        let mut after = vec![0.0; b.len()];
+        assert!(ahead.apply_last_factor(&b, &mut after));
+        assert_eq!(before, after, "the last factor is the flat pattern's still");
+        let x_ahead = solve(&mut ahead, &folded, 2);
+        assert_eq!(ahead.analyses, 3, "the prepared analysis serves the solve");
+        let mut direct = fresh();
+        solve(&mut direct, &flat, 1);
+        let x_direct = solve(&mut direct, &folded, 2);
+        assert_eq!(x_ahead, x_direct, "the same solution, bit for bit");
     }
 
     /// An obstacle's node that was on its own and now touches the whole cloth: with the step's
