@@ -819,6 +819,12 @@ pub fn solve(
                 }
                 if !solved {
                     let t_factor = Instant::now();
+                    // The single-precision factor's refinement stops where a reuse's CG does:
+                    // an inexact Newton direction (Eisenstat–Walker), each refinement iteration
+                    // two triangular solves that stream the whole factor.
+                    let g_norm = dot(&ws.gradient, &ws.gradient).sqrt();
+                    let eta = REUSE_RELATIVE_TOLERANCE.min(residual / r0);
+                    let tol = (eta * g_norm).max(0.1 * settings.residual_tolerance_n * dt);
                     solved = ws
                         .cholesky
                         .solve(
@@ -827,6 +833,7 @@ pub fn solve(
                             &ws.rhs,
                             &mut ws.step,
                             definite.on || project,
+                            tol,
                         )
                         .is_ok();
                     if trace {

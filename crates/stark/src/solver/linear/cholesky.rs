@@ -418,7 +418,9 @@ impl CholeskySolver {
     /// redone only when it changes. `definite`: the matrix is expected to be positive definite
     /// (its terms' definite or projected forms); a single-precision factorisation that fails then
     /// is repeated in double precision, while otherwise its failure is reported at once (the
-    /// caller's next attempt is with definite forms).
+    /// caller's next attempt is with definite forms). `tolerance`: the residual norm `‖b − A x‖`
+    /// at which the refinement of a single-precision solve may stop (0: to
+    /// [`REFINE_RELATIVE_TOLERANCE`] of `‖b‖`, as a double-precision factor solves).
     pub fn solve(
         &mut self,
         a: &BlockSparseMatrix,
@@ -426,6 +428,7 @@ impl CholeskySolver {
         b: &[f64],
         x: &mut [f64],
         definite: bool,
+        tolerance: f64,
     ) -> Result<(), CholeskyError> {
         // The thread pool the solve runs in (one thread: no parallel overhead at all).
         let par = match rayon::current_num_threads() {
@@ -453,7 +456,7 @@ impl CholeskySolver {
                         a,
                         b,
                         x,
-                        REFINE_RELATIVE_TOLERANCE * b_norm,
+                        tolerance.max(REFINE_RELATIVE_TOLERANCE * b_norm),
                         REFINE_MAX_CG,
                         &mut |r, z| single.apply(an, r, z),
                     );
@@ -653,7 +656,7 @@ mod tests {
             // Make the off-diagonal blocks mutually transposed (symmetric matrix).
             let b: Vec<f64> = (0..9).map(|i| i as f64 - 3.0).collect();
             let mut x = vec![0.0; 9];
-            solver.solve(&a, 7, &b, &mut x, true).unwrap();
+            solver.solve(&a, 7, &b, &mut x, true, 0.0).unwrap();
             let mut ax = vec![0.0; 9];
             a.mul_vec(&x, &mut ax);
             for i in 0..9 {
@@ -704,7 +707,7 @@ mod tests {
     fn solves_exactly(solver: &mut CholeskySolver, a: &BlockSparseMatrix, pattern_id: u64) -> bool {
         let b: Vec<f64> = (0..a.dim()).map(|i| (i % 7) as f64 - 3.0).collect();
         let mut x = vec![0.0; b.len()];
-        solver.solve(a, pattern_id, &b, &mut x, true).unwrap();
+        solver.solve(a, pattern_id, &b, &mut x, true, 0.0).unwrap();
         let mut ax = vec![0.0; b.len()];
         a.mul_vec(&x, &mut ax);
         ax.iter().zip(&b).all(|(p, q)| (p - q).abs() < 1e-10)
@@ -782,7 +785,7 @@ mod tests {
         let b: Vec<f64> = (0..flat.dim()).map(|i| ((i * 29) % 13) as f64 - 6.0).collect();
         let solve = |solver: &mut CholeskySolver, a: &BlockSparseMatrix, id: u64| {
             let mut x = vec![0.0; b.len()];
-            solver.solve(a, id, &b, &mut x, true).unwrap();
+            solver.solve(a, id, &b, &mut x, true, 0.0).unwrap();
             x
         };
         let fresh = || CholeskySolver {
@@ -888,7 +891,7 @@ mod tests {
         let b: Vec<f64> = (0..a.dim()).map(|i| ((i * 29) % 13) as f64 - 6.0).collect();
         let mut x = vec![0.0; a.dim()];
         let mut solver = CholeskySolver::default();
-        solver.solve(&a, 1, &b, &mut x, false).unwrap();
+        solver.solve(&a, 1, &b, &mut x, false, 0.0).unwrap();
         assert!(solver.single.factored && !solver.factored);
         assert!(
             (1..=REFINE_MAX_CG).contains(&solver.refine_iterations),
@@ -914,9 +917,9 @@ mod tests {
         let b = vec![1.0; a.dim()];
         let mut x = vec![0.0; a.dim()];
         let mut solver = CholeskySolver::default();
-        assert!(solver.solve(&a, 1, &b, &mut x, false).is_err());
+        assert!(solver.solve(&a, 1, &b, &mut x, false, 0.0).is_err());
         assert_eq!(solver.single_precision_fallbacks, 0);
-        assert!(solver.solve(&a, 1, &b, &mut x, true).is_err());
+        assert!(solver.solve(&a, 1, &b, &mut x, true, 0.0).is_err());
         assert_eq!(solver.single_precision_fallbacks, 1);
         assert!(!solver.apply_last_factor(&b, &mut x));
     }
@@ -940,7 +943,7 @@ mod tests {
         let b: Vec<f64> = (0..a.dim()).map(|i| (i % 5) as f64).collect();
         let mut x = vec![0.0; a.dim()];
         let mut solver = CholeskySolver::default();
-        solver.solve(&a, 1, &b, &mut x, true).unwrap();
+        solver.solve(&a, 1, &b, &mut x, true, 0.0).unwrap();
         assert_eq!(solver.single_precision_fallbacks, 1);
         assert!(solver.factored && !solver.single.factored);
         assert!(
