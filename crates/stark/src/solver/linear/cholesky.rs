@@ -8,10 +8,14 @@
 //!
 //! Above [`SINGLE_PRECISION_FROM_UNKNOWNS`] the factor is computed in single precision, of the
 //! matrix scaled to a unit diagonal, and each solve is refined by CG in double precision on the
-//! unscaled matrix with that factor as its preconditioner (two or three iterations to a relative
-//! residual of [`REFINE_RELATIVE_TOLERANCE`]): the factorisation and the triangular solves move
-//! half the bytes. A folded towel under the robot: 10 steps 46.1 → 40.7 s, the same Newton
-//! iterations and residuals (BENCHMARKS.md).
+//! unscaled matrix with that factor as its preconditioner (to the caller's tolerance, Newton's
+//! forcing term, or two or three iterations to a relative residual of
+//! [`REFINE_RELATIVE_TOLERANCE`]): the factorisation and the triangular solves move half the
+//! bytes. A folded towel under the robot: 10 steps 46.1 → 40.7 s, the same Newton iterations and
+//! residuals (BENCHMARKS.md).
+//!
+//! [`CholeskySolver::prepare`] orders and analyses a new pattern ahead of the solve (Newton runs
+//! it beside the assembly of the values), keeping the last factorisation usable meanwhile.
 
 use super::block_sparse::BlockSparseMatrix;
 use super::pcg;

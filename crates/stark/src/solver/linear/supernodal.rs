@@ -43,6 +43,12 @@ const FORK_ABOVE_WORK: f64 = 2.0e5;
 /// one thread idle. The blocks are fixed, so the arithmetic does not depend on the thread count.
 const SPLIT_FROM_COLUMNS: usize = 2 * BLOCK_COLUMNS;
 const BLOCK_COLUMNS: usize = 64;
+/// A supernode's part of a triangular solve below its diagonal block (rows × columns) from which
+/// it is split across threads (a folded towel's top separators: ~10⁵–10⁶ entries each; the unit
+/// tests' small grids split from far fewer, so that their thread-count checks cover the split).
+const PARALLEL_SOLVE_FROM_ENTRIES: usize = if cfg!(test) { 1 << 8 } else { 1 << 16 };
+/// Rows of such a part per task in the forward pass.
+const SOLVE_CHUNK_ROWS: usize = 256;
 
 /// The scalars the factor is computed in (single or double precision).
 pub trait FactorScalar:
@@ -375,37 +381,60 @@ pub fn solve_in_place<T: FactorScalar + std::ops::Mul<Output = T> + std::ops::Di
             }
         }
         let out = unsafe { std::slice::from_raw_parts_mut(pushed_shared.ptr().add(row_ptr[s]), nnz[s]) };
-        out.fill(T::default());
-        // Four columns per pass over `out` (a quarter of its loads and stores).
-        let below = |j: usize| &l[j * n_rows + cols..(j + 1) * n_rows];
-        let mut j = 0;
-        while j + 4 <= cols {
-            let (c0, c1, c2, c3) = (below(j), below(j + 1), below(j + 2), below(j + 3));
-            let (x0, x1, x2, x3) = (xs[j], xs[j + 1], xs[j + 2], xs[j + 3]);
-            for r in 0..out.len() {
-                out[r] += c0[r] * x0 + c1[r] * x1 + c2[r] * x2 + c3[r] * x3;
+        // `out = L₂₁ xs`, rows independent: a top separator's rows in chunks on several threads
+        // (each row summed in the same order: the same bits at any thread count).
+        let xs = &*xs;
+        let rows_from = |first: usize, out: &mut [T]| {
+            out.fill(T::default());
+            // Four columns per pass over `out` (a quarter of its loads and stores).
+            let len = out.len();
+            let below = |j: usize| &l[j * n_rows + cols + first..][..len];
+            let mut j = 0;
+            while j + 4 <= cols {
+                let (c0, c1, c2, c3) = (below(j), below(j + 1), below(j + 2), below(j + 3));
+                let (x0, x1, x2, x3) = (xs[j], xs[j + 1], xs[j + 2], xs[j + 3]);
+                for r in 0..out.len() {
+                    out[r] += c0[r] * x0 + c1[r] * x1 + c2[r] * x2 + c3[r] * x3;
+                }
+                j += 4;
             }
-            j += 4;
-        }
-        for (j, &xj) in xs.iter().enumerate().skip(j) {
-            for (o, &lij) in out.iter_mut().zip(below(j)) {
-                *o += lij * xj;
+            for (j, &xj) in xs.iter().enumerate().skip(j) {
+                for (o, &lij) in out.iter_mut().zip(below(j)) {
+                    *o += lij * xj;
+                }
             }
+        };
+        if out.len() * cols >= PARALLEL_SOLVE_FROM_ENTRIES && rayon::current_num_threads() > 1 {
+            out.par_chunks_mut(SOLVE_CHUNK_ROWS)
+                .enumerate()
+                .for_each(|(k, chunk)| rows_from(k * SOLVE_CHUNK_ROWS, chunk));
+        } else {
+            rows_from(0, out);
         }
     });
     tree.traverse(
         Direction::Down,
         &Mutex::new(Vec::new()),
-        &Vec::new,
-        &|s, gathered: &mut Vec<T>| {
+        &|| (Vec::new(), Vec::new()),
+        &|s, scratch: &mut (Vec<T>, Vec<T>)| {
             let (start, cols, l, n_rows) = block(s);
             let pattern = &rows[row_ptr[s]..row_ptr[s] + nnz[s]];
+            let (gathered, below) = scratch;
             gathered.clear();
             gathered.extend(pattern.iter().map(|&row| unsafe { *x_shared.ptr().add(row) }));
             let xs = unsafe { std::slice::from_raw_parts_mut(x_shared.ptr().add(start), cols) };
+            // `L₂₁ᵀ` times the rows below, column by column (independent: a top separator's
+            // columns on several threads, each the same sum).
+            let below_dot = |j: usize| dot_lanes(&l[j * n_rows + cols..(j + 1) * n_rows], gathered);
+            below.clear();
+            if pattern.len() * cols >= PARALLEL_SOLVE_FROM_ENTRIES && rayon::current_num_threads() > 1 {
+                below.par_extend((0..cols).into_par_iter().map(below_dot));
+            } else {
+                below.extend((0..cols).map(below_dot));
+            }
             for j in (0..cols).rev() {
                 let column = &l[j * n_rows..(j + 1) * n_rows];
-                let sum = dot_lanes(&column[cols..], gathered) + dot_lanes(&column[j + 1..cols], &xs[j + 1..]);
+                let sum = below[j] + dot_lanes(&column[j + 1..cols], &xs[j + 1..]);
                 xs[j] = (xs[j] - sum) / column[j];
             }
         },
