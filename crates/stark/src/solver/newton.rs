@@ -416,9 +416,24 @@ fn tighten_definite_forms(terms: &mut [&mut dyn EnergyTerm]) -> bool {
     changed
 }
 
-/// Relative tolerance of CG preconditioned by the step's factorisation (tightening as
-/// `min(this, r/r₀)`: the Newton iterations keep converging as with exact directions).
+/// Relative tolerance of CG preconditioned by the step's factorisation, and of a fresh
+/// single-precision factor's refinement (tightening as `min(this, r/r₀)`: the Newton iterations
+/// keep converging as with exact directions).
 const REUSE_RELATIVE_TOLERANCE: f64 = 1e-3;
+
+/// The residual norm at which the direct solver's CG (a reuse of the step's factor, or a fresh
+/// factor's refinement) may stop: Newton's forcing term `min(1e-3, r/r₀)` of the gradient's norm,
+/// not below a tenth of the force tolerance (`residual_n` and `first_residual_n` in N).
+fn direct_solve_tolerance(
+    gradient: &[f64],
+    residual_n: f64,
+    first_residual_n: f64,
+    settings: &NewtonSettings,
+    dt: f64,
+) -> f64 {
+    let eta = REUSE_RELATIVE_TOLERANCE.min(residual_n / first_residual_n);
+    (eta * dot(gradient, gradient).sqrt()).max(0.1 * settings.residual_tolerance_n * dt)
+}
 /// CG iterations preconditioned by the step's factorisation before it is refreshed. Each costs
 /// two triangular solves, which stream the whole factor; a factorisation costs about seven of
 /// them (17k unknowns, 3.3M factor entries: ~12 ms against ~87 ms), so beyond this a fresh
@@ -795,9 +810,7 @@ pub fn solve(
                     && !std::mem::take(&mut reuse_failed)
                     && residual < REUSE_BELOW_RELATIVE_RESIDUAL * r0
                 {
-                    let g_norm = dot(&ws.gradient, &ws.gradient).sqrt();
-                    let eta = REUSE_RELATIVE_TOLERANCE.min(residual / r0);
-                    let tol = (eta * g_norm).max(0.1 * settings.residual_tolerance_n * dt);
+                    let tol = direct_solve_tolerance(&ws.gradient, residual, r0, settings, dt);
                     let cholesky = &mut ws.cholesky;
                     let info =
                         pcg::solve_preconditioned(matrix, &ws.rhs, &mut ws.step, tol, REUSE_MAX_CG, &mut |r, z| {
@@ -822,9 +835,7 @@ pub fn solve(
                     // The single-precision factor's refinement stops where a reuse's CG does:
                     // an inexact Newton direction (Eisenstat–Walker), each refinement iteration
                     // two triangular solves that stream the whole factor.
-                    let g_norm = dot(&ws.gradient, &ws.gradient).sqrt();
-                    let eta = REUSE_RELATIVE_TOLERANCE.min(residual / r0);
-                    let tol = (eta * g_norm).max(0.1 * settings.residual_tolerance_n * dt);
+                    let tol = direct_solve_tolerance(&ws.gradient, residual, r0, settings, dt);
                     solved = ws
                         .cholesky
                         .solve(
