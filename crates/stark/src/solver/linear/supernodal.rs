@@ -50,6 +50,12 @@ const PARALLEL_SOLVE_FROM_ENTRIES: usize = if cfg!(test) { 1 << 8 } else { 1 << 
 /// Rows of such a part per task in the forward pass.
 const SOLVE_CHUNK_ROWS: usize = 256;
 
+/// Whether a supernode's part below its diagonal block (`rows` × `cols`) is solved on several
+/// threads.
+fn split_solve(rows: usize, cols: usize) -> bool {
+    rows * cols >= PARALLEL_SOLVE_FROM_ENTRIES && rayon::current_num_threads() > 1
+}
+
 /// The scalars the factor is computed in (single or double precision).
 pub trait FactorScalar:
     faer::traits::ComplexField + Copy + Default + Send + Sync + std::ops::AddAssign + std::ops::SubAssign
@@ -404,7 +410,7 @@ pub fn solve_in_place<T: FactorScalar + std::ops::Mul<Output = T> + std::ops::Di
                 }
             }
         };
-        if out.len() * cols >= PARALLEL_SOLVE_FROM_ENTRIES && rayon::current_num_threads() > 1 {
+        if split_solve(out.len(), cols) {
             out.par_chunks_mut(SOLVE_CHUNK_ROWS)
                 .enumerate()
                 .for_each(|(k, chunk)| rows_from(k * SOLVE_CHUNK_ROWS, chunk));
@@ -427,7 +433,7 @@ pub fn solve_in_place<T: FactorScalar + std::ops::Mul<Output = T> + std::ops::Di
             // columns on several threads, each the same sum).
             let below_dot = |j: usize| dot_lanes(&l[j * n_rows + cols..(j + 1) * n_rows], gathered);
             below.clear();
-            if pattern.len() * cols >= PARALLEL_SOLVE_FROM_ENTRIES && rayon::current_num_threads() > 1 {
+            if split_solve(pattern.len(), cols) {
                 below.par_extend((0..cols).into_par_iter().map(below_dot));
             } else {
                 below.extend((0..cols).map(below_dot));
