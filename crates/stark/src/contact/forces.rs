@@ -6,6 +6,7 @@ use super::PairHessian;
 use crate::energy::term::NO_DOF;
 use crate::energy::{HyperDual, Scalar};
 use nalgebra::Vector3;
+use rayon::prelude::*;
 
 impl Contact {
     /// The barrier (normal contact) force on every node at positions `x`, N: minus the gradient
@@ -22,22 +23,26 @@ impl Contact {
 
     /// Add minus the barrier gradient of `pairs` at `x` to `forces`.
     fn add_barrier_forces(&self, pairs: &[ContactPair], x: &[Vector3<f64>], forces: &mut [Vector3<f64>]) {
-        let mut d = HyperDual::<4>::constant(0.0);
-        for p in pairs {
-            pair_derivatives(
-                p,
-                &Self::stencil_x(&p.nodes, x),
-                p.kappa * p.multiplicity,
-                self.settings.barrier,
-                PairHessian::GaussNewton,
-                &mut d,
-            );
-            for (k, &i) in p.nodes.iter().enumerate() {
-                if i != NO_DOF {
-                    forces[i as usize] -= Vector3::from(d.grad[k]);
-                }
-            }
-        }
+        // The pairs' gradients in parallel, added in the pairs' order.
+        let gradients: Vec<[[f64; 3]; 4]> = pairs
+            .par_iter()
+            .with_min_len(256)
+            .map_init(
+                || HyperDual::<4>::constant(0.0),
+                |d, p| {
+                    pair_derivatives(
+                        p,
+                        &Self::stencil_x(&p.nodes, x),
+                        p.kappa * p.multiplicity,
+                        self.settings.barrier,
+                        PairHessian::GaussNewton,
+                        d,
+                    );
+                    d.grad
+                },
+            )
+            .collect();
+        scatter_forces(pairs.iter().map(|p| &p.nodes[..]), &gradients, forces);
     }
 
     /// The contact forces of the last solve on every node at positions `x` (the converged
@@ -49,15 +54,39 @@ impl Contact {
         let mut normal = vec![Vector3::zeros(); x.len()];
         let mut friction = vec![Vector3::zeros(); x.len()];
         self.add_barrier_forces(&self.pairs, x, &mut normal);
-        let mut d = HyperDual::<4>::constant(0.0);
-        for f in &self.friction_elements {
-            f.derivatives(&Self::stencil_x(&f.nodes, x), &mut d);
-            for (k, &i) in f.nodes[..f.len].iter().enumerate() {
-                if i != NO_DOF {
-                    friction[i as usize] -= Vector3::from(d.grad[k]);
-                }
+        let gradients: Vec<[[f64; 3]; 4]> = self
+            .friction_elements
+            .par_iter()
+            .with_min_len(256)
+            .map_init(
+                || HyperDual::<4>::constant(0.0),
+                |d, f| {
+                    f.derivatives(&Self::stencil_x(&f.nodes, x), d);
+                    d.grad
+                },
+            )
+            .collect();
+        scatter_forces(
+            self.friction_elements.iter().map(|f| &f.nodes[..f.len]),
+            &gradients,
+            &mut friction,
+        );
+        (normal, friction)
+    }
+}
+
+/// `forces[node] -= gradient` for each element's nodes (in the elements' order: the same sums
+/// at any thread count).
+fn scatter_forces<'a>(
+    stencils: impl Iterator<Item = &'a [u32]>,
+    gradients: &[[[f64; 3]; 4]],
+    forces: &mut [Vector3<f64>],
+) {
+    for (nodes, grad) in stencils.zip(gradients) {
+        for (&i, g) in nodes.iter().zip(grad) {
+            if i != NO_DOF {
+                forces[i as usize] -= Vector3::from(*g);
             }
         }
-        (normal, friction)
     }
 }

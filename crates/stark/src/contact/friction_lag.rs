@@ -10,6 +10,7 @@ use crate::geometry::distance::{
     EdgeEdgeDistanceType as Ee, PointEdgeDistanceType, PointTriangleDistanceType as Pt,
 };
 use nalgebra::Vector3;
+use rayon::prelude::*;
 
 impl Contact {
     /// Lagged friction elements from the pairs active at `x0`. The slip is measured from the
@@ -24,8 +25,10 @@ impl Contact {
     ) {
         let eps = self.settings.friction_stick_slide_threshold_m_s * dt;
         let kind = self.settings.barrier;
+        // In parallel, in the pairs' order.
         self.friction_elements = pairs
-            .iter()
+            .par_iter()
+            .with_min_len(256)
             .filter(|p| p.mu > 0.0)
             .filter_map(|p| {
                 let x = Self::stencil_x(&p.nodes, x0);

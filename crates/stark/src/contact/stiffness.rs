@@ -205,7 +205,12 @@ impl Contact {
         if self.settings.stiffness.is_some() || self.pairs.is_empty() {
             return false;
         }
-        let distances: Vec<f64> = self.pairs.iter().map(|p| Self::pair_distance(p, state.x)).collect();
+        let distances: Vec<f64> = self
+            .pairs
+            .par_iter()
+            .with_min_len(1024)
+            .map(|p| Self::pair_distance(p, state.x))
+            .collect();
         let kind = self.settings.barrier;
         // Pairs of objects whose load is to be measured (IPC's gradient balance, per pair of
         // objects): engaged (closer than 0.9 d̂) and either never measured or pressed below a
@@ -246,9 +251,11 @@ impl Contact {
             .filter(|(_, &o)| self.object_masses_kg.get(o as usize).is_some_and(|&m| m == 0.0))
             .map(|(&p, _)| p)
             .collect();
-        // The barrier's DOF-space gradient, in total and per unit κ of each measured key.
-        let mut barrier_total: std::collections::BTreeMap<u32, Vector3<f64>> = Default::default();
-        let mut per_unit: Vec<std::collections::BTreeMap<u32, Vector3<f64>>> = vec![Default::default(); keys.len()];
+        // The barrier's DOF-space gradient, in total and per unit κ of each measured key, per
+        // DOF block (`None`: no pair reaches the block).
+        let n_blocks = gradient.len() / 3;
+        let mut barrier_total: Vec<Option<Vector3<f64>>> = vec![None; n_blocks];
+        let mut per_unit: Vec<Vec<Option<Vector3<f64>>>> = vec![vec![None; n_blocks]; keys.len()];
         let mut slope_sum = vec![0.0; keys.len()];
         let mut slope_count = vec![0usize; keys.len()];
         for (e, (p, &d)) in self.pairs.iter().zip(&distances).enumerate() {
@@ -267,12 +274,12 @@ impl Contact {
                     continue;
                 }
                 let g = Vector3::new(out[3 * k], out[1 + 3 * k], out[2 + 3 * k]);
-                *barrier_total.entry(b).or_insert_with(Vector3::zeros) += g;
+                *barrier_total[b as usize].get_or_insert_with(Vector3::zeros) += g;
                 if kinematic.contains(&b) {
                     continue;
                 }
                 if let Some(i) = key {
-                    *per_unit[i].entry(b).or_insert_with(Vector3::zeros) += g / p.kappa;
+                    *per_unit[i][b as usize].get_or_insert_with(Vector3::zeros) += g / p.kappa;
                 }
             }
             if let Some(i) = key {
@@ -282,17 +289,19 @@ impl Contact {
         }
         let other = |b: u32| {
             let i = 3 * b as usize;
-            Vector3::new(gradient[i], gradient[i + 1], gradient[i + 2]) - barrier_total[&b]
+            Vector3::new(gradient[i], gradient[i + 1], gradient[i + 2])
+                - barrier_total[b as usize].expect("a pair's block")
         };
         // Least squares: the stiffnesses whose barrier forces best cancel everything else.
         let n = keys.len();
         let mut a = nalgebra::DMatrix::<f64>::zeros(n, n);
         let mut r = nalgebra::DVector::<f64>::zeros(n);
         for i in 0..n {
-            for (&b, g) in &per_unit[i] {
-                r[i] -= g.dot(&other(b));
+            for (b, g) in per_unit[i].iter().enumerate() {
+                let Some(g) = g else { continue };
+                r[i] -= g.dot(&other(b as u32));
                 for j in 0..n {
-                    if let Some(h) = per_unit[j].get(&b) {
+                    if let Some(h) = &per_unit[j][b] {
                         a[(i, j)] += g.dot(h);
                     }
                 }

@@ -13,6 +13,7 @@ use crate::energy::Node;
 use crate::energy::{EnergyTerm, EvalMode, HyperDual, Scalar, StepCheck, Vec3};
 use crate::error::Result;
 use crate::state::EvalState;
+use rayon::prelude::*;
 
 /// How the nodes of a pair (padded with `NO_DOF`) depend on the DOFs.
 pub(super) fn node_maps<'s>(nodes: &[u32; 4], state: &'s EvalState) -> [NodeMap<'s>; 4] {
@@ -49,13 +50,28 @@ impl EnergyTerm for Contact {
                 .map(|&f| self.friction_elements[f as usize].nodes),
         );
         let w = self.stencil_width(state);
-        for (o, nodes) in out.chunks_exact_mut(w).zip(all) {
-            if w == 4 {
+        if w == 4 {
+            for (o, nodes) in out.chunks_exact_mut(w).zip(all) {
                 o.copy_from_slice(&nodes);
-            } else {
-                element_blocks(&node_maps(&nodes, state), o);
             }
+            return;
         }
+        // Through rigid bodies' maps: in parallel (a serial pass over the towel's 114k elements).
+        let (pair_out, lone_out) = out.split_at_mut(self.pairs.len() * w);
+        pair_out
+            .par_chunks_exact_mut(w)
+            .zip(self.pairs.par_iter())
+            .with_min_len(256)
+            .for_each(|(o, p)| {
+                element_blocks(&node_maps(&p.nodes, state), o);
+            });
+        lone_out
+            .par_chunks_exact_mut(w)
+            .zip(self.lone_friction.par_iter())
+            .with_min_len(256)
+            .for_each(|(o, &f)| {
+                element_blocks(&node_maps(&self.friction_elements[f as usize].nodes, state), o);
+            });
     }
     fn topology_version(&self) -> u64 {
         self.version
@@ -104,9 +120,11 @@ impl EnergyTerm for Contact {
     }
     fn accept_iterate(&mut self, from: &EvalState, to: &EvalState) {
         // Friction's dual variables follow the step (`friction`'s primal–dual Hessian).
-        for f in self.friction_elements.iter_mut() {
-            f.update_dual(&Self::stencil_x(&f.nodes, from.x), &Self::stencil_x(&f.nodes, to.x));
-        }
+        // In parallel: each element's dual is its own (the towel's 57k were a serial pass).
+        self.friction_elements
+            .par_iter_mut()
+            .with_min_len(256)
+            .for_each(|f| f.update_dual(&Self::stencil_x(&f.nodes, from.x), &Self::stencil_x(&f.nodes, to.x)));
     }
     fn save_iterate(&mut self) {
         self.saved_duals.clear();

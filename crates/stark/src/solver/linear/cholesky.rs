@@ -26,6 +26,7 @@ use faer::sparse::linalg::cholesky::{
 };
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::{Conj, MatMut, Par, Side};
+use rayon::prelude::*;
 
 /// An analysis with the step's ordering whose factor has more than this many times the entries of
 /// the last one orders afresh.
@@ -58,6 +59,26 @@ struct Analysis {
     /// The supernodal elimination tree, when faer's analysis is supernodal (our own numeric
     /// factorisation then, its subtrees in parallel: [`supernodal`]).
     tree: Option<SupernodeTree>,
+    /// Column boundaries splitting the lower triangle's entries into runs of about
+    /// [`PARALLEL_ENTRIES`] (the per-entry passes of a factorisation run on them in parallel).
+    column_runs: Vec<usize>,
+}
+
+/// Entries per parallel run of the gather and the scaling that precede a factorisation (they
+/// were a serial ~10% of the two-thread time of a folded towel under the robot).
+const PARALLEL_ENTRIES: usize = 1 << 15;
+
+/// `out` (one entry per lower-triangle entry of `an`) split at `an.column_runs`.
+fn column_run_slices<'a, T>(an: &Analysis, mut out: &'a mut [T]) -> Vec<(std::ops::Range<usize>, &'a mut [T])> {
+    let col_ptr = an.symbolic_matrix.col_ptr();
+    an.column_runs
+        .windows(2)
+        .map(|w| {
+            let (head, tail) = std::mem::take(&mut out).split_at_mut(col_ptr[w[1]] - col_ptr[w[0]]);
+            out = tail;
+            (w[0]..w[1], head)
+        })
+        .collect()
 }
 
 /// The fill-reducing ordering: METIS's nested dissection of the block graph, each block's three
@@ -285,6 +306,13 @@ impl CholeskySolver {
             source.extend(column.iter().map(|e| e.1));
             col_ptr.push(row_idx.len());
         }
+        let mut column_runs = vec![0];
+        for j in 1..=n {
+            if j == n || col_ptr[j] - col_ptr[*column_runs.last().expect("nonempty")] >= PARALLEL_ENTRIES {
+                column_runs.push(j);
+            }
+        }
+        column_runs.dedup();
         let symbolic_matrix = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
         let symbolic_llt = match order {
             // faer's analysis without an ordering reads the upper triangle whatever the side
@@ -314,6 +342,7 @@ impl CholeskySolver {
             symbolic_llt,
             source,
             forward: order.map(|o| scalar_permutation(o).0),
+            column_runs,
         })
     }
 
@@ -448,9 +477,16 @@ impl CholeskySolver {
         }
         let an = self.analysis.as_ref().expect("analysis present");
         debug_assert_eq!(an.pattern_id, pattern_id);
-        self.values.clear();
+        // The gather in parallel runs (a random read per entry).
+        self.values.resize(an.source.len(), 0.0);
         self.values
-            .extend(an.source.iter().map(|&(blk, e)| a.values[blk as usize][e as usize]));
+            .par_chunks_mut(PARALLEL_ENTRIES)
+            .zip(an.source.par_chunks(PARALLEL_ENTRIES))
+            .for_each(|(out, source)| {
+                for (v, &(blk, e)) in out.iter_mut().zip(source) {
+                    *v = a.values[blk as usize][e as usize];
+                }
+            });
         if b.len() >= SINGLE_PRECISION_FROM_UNKNOWNS {
             match self.single.factorise(an, &self.values, par) {
                 Ok(()) => {
@@ -530,10 +566,16 @@ fn factorise_numeric<'w, T: FactorScalar>(
     par: Par,
 ) -> Result<&'w mut MemBuffer, String> {
     let symbolic = &an.symbolic_llt;
-    let req = StackReq::any_of(&[
-        symbolic.factorize_numeric_llt_scratch::<T>(par, Default::default()),
-        symbolic.solve_in_place_scratch::<T>(1, par),
-    ]);
+    // Our supernodal factorisation and solves need no workspace of faer's (whose size is a pass
+    // over the supernodes: ~1 ms of serial work at each factorisation of a folded towel).
+    let req = if an.tree.is_some() {
+        StackReq::EMPTY
+    } else {
+        StackReq::any_of(&[
+            symbolic.factorize_numeric_llt_scratch::<T>(par, Default::default()),
+            symbolic.solve_in_place_scratch::<T>(1, par),
+        ])
+    };
     let buffer = workspace(slot, req, par).map_err(|e| e.to_string())?;
     factor.resize(symbolic.len_val(), T::default());
     if let (Some(tree), SymbolicCholeskyRaw::Supernodal(supernodal)) = (&an.tree, symbolic.raw()) {
@@ -582,12 +624,19 @@ impl SingleFactor {
             }
             self.scale.push(1.0 / d.sqrt());
         }
-        self.values.clear();
-        for j in 0..n {
-            let sj = self.scale[j];
-            self.values
-                .extend((col_ptr[j]..col_ptr[j + 1]).map(|k| (values[k] * self.scale[row_idx[k]] * sj) as f32));
-        }
+        self.values.resize(values.len(), 0.0);
+        let scale = &self.scale;
+        column_run_slices(an, &mut self.values)
+            .into_par_iter()
+            .for_each(|(columns, out)| {
+                let base = col_ptr[columns.start];
+                for j in columns {
+                    let sj = scale[j];
+                    for k in col_ptr[j]..col_ptr[j + 1] {
+                        out[k - base] = (values[k] * scale[row_idx[k]] * sj) as f32;
+                    }
+                }
+            });
         factorise_numeric(
             an,
             &self.values,
