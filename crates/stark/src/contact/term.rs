@@ -44,13 +44,13 @@ impl EnergyTerm for Contact {
         }
     }
     fn write_stencils(&self, state: &EvalState, out: &mut [u32]) {
-        let all = self.pairs.iter().map(|p| p.nodes).chain(
-            self.lone_friction
-                .iter()
-                .map(|&f| self.friction_elements[f as usize].nodes),
-        );
         let w = self.stencil_width(state);
         if w == 4 {
+            let all = self.pairs.iter().map(|p| p.nodes).chain(
+                self.lone_friction
+                    .iter()
+                    .map(|&f| self.friction_elements[f as usize].nodes),
+            );
             for (o, nodes) in out.chunks_exact_mut(w).zip(all) {
                 o.copy_from_slice(&nodes);
             }

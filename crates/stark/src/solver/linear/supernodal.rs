@@ -43,6 +43,12 @@ const FORK_ABOVE_WORK: f64 = 2.0e5;
 /// one thread idle. The blocks are fixed, so the arithmetic does not depend on the thread count.
 const SPLIT_FROM_COLUMNS: usize = 2 * BLOCK_COLUMNS;
 const BLOCK_COLUMNS: usize = 64;
+/// Supernodes of at least this many columns solve for their `L₂₁` in chunks of
+/// `TRIANGULAR_CHUNK_ROWS` rows, in parallel; the chunks are fixed, so the arithmetic does not
+/// depend on the thread count (the unit tests' small grids split from far smaller supernodes,
+/// so that their thread-count checks cover it).
+const TRIANGULAR_SPLIT_FROM_COLUMNS: usize = if cfg!(test) { 4 } else { SPLIT_FROM_COLUMNS };
+const TRIANGULAR_CHUNK_ROWS: usize = if cfg!(test) { 8 } else { 256 };
 /// A supernode's part of a triangular solve below its diagonal block (rows × columns) from which
 /// it is split across threads (a folded towel's top separators: ~10⁵–10⁶ entries each; the unit
 /// tests' small grids split from far fewer, so that their thread-count checks cover the split).
@@ -677,12 +683,28 @@ impl<'a, T: FactorScalar> Job<'a, T> {
             self.failure.fetch_min(start + index, Ordering::Relaxed);
             return;
         }
-        // L₂₁ L₁₁ᵀ = A₂₁, i.e. L₁₁ L₂₁ᵀ = A₂₁ᵀ.
-        faer::linalg::triangular_solve::solve_lower_triangular_in_place(
-            top.rb(),
-            bottom.rb_mut().transpose_mut(),
-            Par::Seq,
-        );
+        // L₂₁ L₁₁ᵀ = A₂₁, i.e. L₁₁ L₂₁ᵀ = A₂₁ᵀ: each row of L₂₁ on its own. A split supernode's
+        // rows go in fixed chunks (in parallel when the pool has several threads: at two threads
+        // these solves were a serial ~0.4 s of the folded towel's 10-step window).
+        let solve_rows = |rows: MatMut<'_, T>| {
+            faer::linalg::triangular_solve::solve_lower_triangular_in_place(top.rb(), rows.transpose_mut(), Par::Seq);
+        };
+        if cols >= TRIANGULAR_SPLIT_FROM_COLUMNS && bottom.nrows() > TRIANGULAR_CHUNK_ROWS {
+            let mut chunks = Vec::with_capacity(bottom.nrows().div_ceil(TRIANGULAR_CHUNK_ROWS));
+            while bottom.nrows() > TRIANGULAR_CHUNK_ROWS {
+                let (head, tail) = bottom.split_at_row_mut(TRIANGULAR_CHUNK_ROWS);
+                chunks.push(head);
+                bottom = tail;
+            }
+            chunks.push(bottom);
+            if rayon::current_num_threads() > 1 {
+                chunks.into_par_iter().for_each(solve_rows);
+            } else {
+                chunks.into_iter().for_each(solve_rows);
+            }
+        } else {
+            solve_rows(bottom);
+        }
     }
 
     /// The rows of supernode `s`'s pattern (below its columns).
@@ -892,6 +914,11 @@ mod tests {
         assert!(
             tree.max_columns >= SPLIT_FROM_COLUMNS + BLOCK_COLUMNS / 2,
             "a separator split in blocks"
+        );
+        assert!(
+            (0..tree.begin.len() - 1).any(|s| tree.begin[s + 1] - tree.begin[s] >= TRIANGULAR_SPLIT_FROM_COLUMNS
+                && symbolic.nnz_per_super()[s] > 2 * TRIANGULAR_CHUNK_ROWS),
+            "a supernode's rows below solved in chunks"
         );
         let one = ours(1, symbolic, &pattern, &values).unwrap();
         let two = ours(2, symbolic, &pattern, &values).unwrap();
