@@ -64,6 +64,9 @@ impl Contact {
             })
             .collect();
         self.stats.friction_pairs = self.friction_elements.len();
+        self.friction_nodes.clear();
+        self.friction_nodes
+            .extend(self.friction_elements.iter().map(|f| f.nodes));
         self.friction_by_nodes.clear();
         for (i, f) in self.friction_elements.iter().enumerate() {
             self.friction_by_nodes.entry(f.nodes).or_insert(i as u32);
@@ -84,7 +87,7 @@ impl Contact {
             .pairs
             .iter()
             .map(|p| {
-                let found = if next < n && self.friction_elements[next].nodes == p.nodes && !taken[next] {
+                let found = if next < n && self.friction_nodes[next] == p.nodes && !taken[next] {
                     Some(next)
                 } else {
                     self.friction_by_nodes
