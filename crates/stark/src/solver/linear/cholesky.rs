@@ -64,8 +64,8 @@ struct Analysis {
     column_runs: Vec<usize>,
 }
 
-/// Entries per parallel run of the gather and the scaling that precede a factorisation (they
-/// were a serial ~10% of the two-thread time of a folded towel under the robot).
+/// Entries per parallel run of the gather and the scaling that precede a factorisation (on one
+/// thread they were ~3% of the two-thread time of a folded towel under the robot).
 const PARALLEL_ENTRIES: usize = 1 << 15;
 
 /// `out` (one entry per lower-triangle entry of `an`) split at `an.column_runs`.
