@@ -282,29 +282,32 @@ impl CholeskySolver {
         let mut col_ptr = Vec::with_capacity(n + 1);
         let mut row_idx = Vec::new();
         let mut source = Vec::new();
-        let mut column: Vec<(usize, (u32, u8))> = Vec::new();
+        // Per block column: its neighbours at or below it, sorted once for its three columns.
+        let mut neighbours: Vec<(usize, u32)> = Vec::new();
         col_ptr.push(0usize);
-        for j in 0..n {
-            let (bj, jj) = (j / 3, j % 3);
+        for bj in 0..blocks {
             let bc = order.map_or(bj, |o| o[bj]);
-            column.clear();
-            for idx in a.row_start[bc]..a.row_start[bc + 1] {
-                let brn = new_of_old[a.cols[idx] as usize];
-                if brn < bj {
-                    continue;
-                }
-                for ii in 0..3 {
-                    let i = 3 * brn + ii;
-                    if i >= j {
-                        // Entry (i, j) = entry (j, i) of old block (bc, br): row jj, column ii.
-                        column.push((i, (idx as u32, (3 * jj + ii) as u8)));
+            neighbours.clear();
+            neighbours.extend(
+                (a.row_start[bc]..a.row_start[bc + 1])
+                    .map(|idx| (new_of_old[a.cols[idx] as usize], idx as u32))
+                    .filter(|&(brn, _)| brn >= bj),
+            );
+            neighbours.sort_unstable_by_key(|e| e.0);
+            for jj in 0..3 {
+                let j = 3 * bj + jj;
+                for &(brn, idx) in &neighbours {
+                    for ii in 0..3 {
+                        let i = 3 * brn + ii;
+                        if i >= j {
+                            // Entry (i, j) = entry (j, i) of old block (bc, br): row jj, column ii.
+                            row_idx.push(i);
+                            source.push((idx, (3 * jj + ii) as u8));
+                        }
                     }
                 }
+                col_ptr.push(row_idx.len());
             }
-            column.sort_unstable_by_key(|e| e.0);
-            row_idx.extend(column.iter().map(|e| e.0));
-            source.extend(column.iter().map(|e| e.1));
-            col_ptr.push(row_idx.len());
         }
         let mut column_runs = vec![0];
         for j in 1..=n {
