@@ -57,21 +57,20 @@ impl EnergyTerm for Contact {
             return;
         }
         // Through rigid bodies' maps: in parallel (a serial pass over the towel's 114k elements).
+        let blocks = |o: &mut [u32], nodes: &[u32; 4]| {
+            element_blocks(&node_maps(nodes, state), o);
+        };
         let (pair_out, lone_out) = out.split_at_mut(self.pairs.len() * w);
         pair_out
             .par_chunks_exact_mut(w)
             .zip(self.pairs.par_iter())
             .with_min_len(256)
-            .for_each(|(o, p)| {
-                element_blocks(&node_maps(&p.nodes, state), o);
-            });
+            .for_each(|(o, p)| blocks(o, &p.nodes));
         lone_out
             .par_chunks_exact_mut(w)
             .zip(self.lone_friction.par_iter())
             .with_min_len(256)
-            .for_each(|(o, &f)| {
-                element_blocks(&node_maps(&self.friction_elements[f as usize].nodes, state), o);
-            });
+            .for_each(|(o, &f)| blocks(o, &self.friction_elements[f as usize].nodes));
     }
     fn topology_version(&self) -> u64 {
         self.version

@@ -315,7 +315,6 @@ impl CholeskySolver {
                 column_runs.push(j);
             }
         }
-        column_runs.dedup();
         let symbolic_matrix = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
         let symbolic_llt = match order {
             // faer's analysis without an ordering reads the upper triangle whatever the side
